@@ -1,0 +1,11 @@
+//! radarnav: a robot-simulation workbench for navigation with a scanning radar that sees
+//! through foliage, smoke and dust where a laser scanner cannot.
+//!
+//! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
+//! Modules: [`world`] (shapes, materials, ray intervals), [`scenario`] (TOML files and the
+//! built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`render`] (figures).
+
+pub mod pose;
+pub mod world;
+
+pub use pose::Pose;

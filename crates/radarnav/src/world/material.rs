@@ -1,0 +1,207 @@
+//! Materials: how radar and laser rays behave inside an object, and whether a robot may drive
+//! through it.
+//!
+//! Default figures (one-way, mm-wave radar; near-infrared laser). The thesis model only needs
+//! them relative to a radar's penetration budget; the values below are the published ones so
+//! that the same budgets also make physical sense:
+//!
+//! | material | radar dB/m | laser | source |
+//! |---|---|---|---|
+//! | `foliage_light` | 1.55 | opaque | Weissberger 1982 model at 77 GHz for depths < 14 m, in the range 0.75 (bare) – 2.5 (in leaf) dB/m of the measurements collected by Rappaport & Deng, ICC 2015 |
+//! | `foliage_dense` | 3.0 | opaque | middle of 2–4 dB/m for dry dense leaves at 38 GHz (same collection; wet leaves reach 6–8 dB/m) |
+//! | `smoke` | 0.0 | opaque | mm-wave loss in smoke and fog ≈ 0 (Pierce et al., SPIE 4530) |
+//! | `dust` | 0.02 | 20 dB/m | < 0.02 dB/m at 94 GHz for 3000 mg/m³ (Wikner, ARL-TR-4399, 2008); the laser figure is our choice for a cloud a laser sees about half a metre into |
+//! | `glass` | 500 | 60 dB/m | ≈ 3 dB through a 6 mm pane at 77 GHz; ≈ 8 % loss per pane at 905 nm: a laser sees through windows |
+//! | `concrete`, `wood`, `metal`, `absorber` | solid | opaque | stop both rays at the surface |
+//!
+//! Radar reflectivities (power fraction at normal incidence) are rough values from 60–77 GHz
+//! reflection measurements (metal ≈ 1, concrete ≈ 0.35, wood ≈ 0.2, glass ≈ 0.25, foliage ≈
+//! 0.1, absorber 0); the thesis model does not use them, the echo model will.
+
+use serde::Serialize;
+
+/// Index of a material in a [`MaterialTable`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub struct MaterialId(pub u16);
+
+/// Which kind of ray is asking about a material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Band {
+    /// A radar ray: penetrates by `radar_attenuation_db_per_m`.
+    Radar,
+    /// A laser ray: stopped by `laser_opaque`, otherwise attenuated.
+    Laser,
+    /// Ground truth: every object stops the ray at its surface.
+    Surface,
+}
+
+/// One material's physical behaviour.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Material {
+    /// Unique name.
+    pub name: String,
+    /// One-way radar loss inside, dB/m; infinite for a solid.
+    pub radar_attenuation_db_per_m: f64,
+    /// Fraction of incident radar power reflected at entry (0 absorber … 1 metal).
+    pub radar_reflectivity: f64,
+    /// Whether radar rays mirror off it.
+    pub specular: bool,
+    /// Whether a laser ray stops at its surface.
+    pub laser_opaque: bool,
+    /// Laser loss inside when not opaque, dB/m.
+    pub laser_attenuation_db_per_m: f64,
+    /// Whether a robot may drive through it.
+    pub traversable: bool,
+    /// Colour in figures, RGB.
+    pub color: [u8; 3],
+}
+
+impl Material {
+    /// The loss in dB/m that a ray of `band` suffers inside this material (infinite = solid).
+    pub fn attenuation_db_per_m(&self, band: Band) -> f64 {
+        match band {
+            Band::Radar => self.radar_attenuation_db_per_m,
+            Band::Laser if self.laser_opaque => f64::INFINITY,
+            Band::Laser => self.laser_attenuation_db_per_m,
+            Band::Surface => f64::INFINITY,
+        }
+    }
+
+    /// Whether the radar sees into it (finite attenuation).
+    pub fn radar_penetrable(&self) -> bool {
+        self.radar_attenuation_db_per_m.is_finite()
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn builtin(
+    name: &str,
+    radar: f64,
+    reflectivity: f64,
+    specular: bool,
+    laser: Option<f64>,
+    traversable: bool,
+    color: [u8; 3],
+) -> Material {
+    Material {
+        name: name.to_owned(),
+        radar_attenuation_db_per_m: radar,
+        radar_reflectivity: reflectivity,
+        specular,
+        laser_opaque: laser.is_none(),
+        laser_attenuation_db_per_m: laser.unwrap_or(f64::INFINITY),
+        traversable,
+        color,
+    }
+}
+
+/// The built-in materials, in a fixed order (their ids in a fresh table).
+pub fn builtin_materials() -> Vec<Material> {
+    let inf = f64::INFINITY;
+    vec![
+        builtin("concrete", inf, 0.35, false, None, false, [150, 150, 150]),
+        builtin("metal", inf, 1.0, true, None, false, [90, 110, 140]),
+        builtin("wood", inf, 0.2, false, None, false, [160, 110, 60]),
+        builtin("glass", 500.0, 0.25, true, Some(60.0), false, [150, 210, 230]),
+        builtin("foliage_light", 1.55, 0.1, false, None, false, [120, 200, 90]),
+        builtin("foliage_dense", 3.0, 0.1, false, None, false, [40, 130, 50]),
+        builtin("smoke", 0.0, 0.0, false, None, true, [175, 170, 185]),
+        builtin("dust", 0.02, 0.0, false, Some(20.0), true, [205, 185, 140]),
+        builtin("absorber", inf, 0.0, false, None, false, [60, 40, 60]),
+    ]
+}
+
+/// The materials of a world, addressed by [`MaterialId`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MaterialTable {
+    materials: Vec<Material>,
+}
+
+impl Default for MaterialTable {
+    fn default() -> Self {
+        Self {
+            materials: builtin_materials(),
+        }
+    }
+}
+
+impl MaterialTable {
+    /// Adds a material, or replaces the one of the same name (a scenario may re-tune a
+    /// built-in); returns its id. `None` once 65 535 materials exist.
+    pub fn insert(&mut self, m: Material) -> Option<MaterialId> {
+        if let Some(id) = self.id(&m.name) {
+            self.materials[id.0 as usize] = m;
+            return Some(id);
+        }
+        let id = MaterialId(u16::try_from(self.materials.len()).ok()?);
+        self.materials.push(m);
+        Some(id)
+    }
+
+    /// The id of the material named `name`.
+    pub fn id(&self, name: &str) -> Option<MaterialId> {
+        self.materials
+            .iter()
+            .position(|m| m.name == name)
+            .map(|i| MaterialId(i as u16))
+    }
+
+    /// The material with this id. Ids come from this table, so this cannot miss.
+    pub fn get(&self, id: MaterialId) -> &Material {
+        &self.materials[id.0 as usize]
+    }
+
+    /// All materials in id order.
+    pub fn iter(&self) -> impl Iterator<Item = (MaterialId, &Material)> {
+        self.materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (MaterialId(i as u16), m))
+    }
+
+    /// Names of all materials, for error messages.
+    pub fn names(&self) -> Vec<&str> {
+        self.materials.iter().map(|m| m.name.as_str()).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_present_and_consistent() {
+        let t = MaterialTable::default();
+        for name in [
+            "concrete",
+            "metal",
+            "wood",
+            "glass",
+            "foliage_light",
+            "foliage_dense",
+            "smoke",
+            "dust",
+            "absorber",
+        ] {
+            assert!(t.id(name).is_some(), "{name}");
+        }
+        let smoke = t.get(t.id("smoke").unwrap());
+        assert!(smoke.traversable && smoke.laser_opaque);
+        assert_eq!(smoke.attenuation_db_per_m(Band::Radar), 0.0);
+        let foliage = t.get(t.id("foliage_dense").unwrap());
+        assert!(foliage.radar_penetrable() && !foliage.traversable);
+        assert!(foliage.attenuation_db_per_m(Band::Laser).is_infinite());
+        assert!(foliage.attenuation_db_per_m(Band::Surface).is_infinite());
+    }
+
+    #[test]
+    fn insert_replaces_by_name() {
+        let mut t = MaterialTable::default();
+        let before = t.iter().count();
+        let mut m = t.get(t.id("smoke").unwrap()).clone();
+        m.radar_attenuation_db_per_m = 0.5;
+        let id = t.insert(m).unwrap();
+        assert_eq!(t.iter().count(), before);
+        assert_eq!(t.get(id).radar_attenuation_db_per_m, 0.5);
+    }
+}
