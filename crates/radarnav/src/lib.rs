@@ -6,6 +6,7 @@
 //! built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`render`] (figures).
 
 pub mod pose;
+pub mod sensor;
 pub mod world;
 
 pub use pose::Pose;

@@ -35,6 +35,13 @@ pub struct Interval {
     pub material: MaterialId,
 }
 
+/// Reusable buffers for [`World::ray_intervals`], so that casting many rays allocates nothing.
+#[derive(Clone, Debug, Default)]
+pub struct RayQuery {
+    spans: Vec<(f64, f64)>,
+    intervals: Vec<Interval>,
+}
+
 /// Objects, their materials and a bounding-volume hierarchy over them.
 #[derive(Clone)]
 pub struct World {
@@ -92,28 +99,32 @@ impl World {
         })
     }
 
-    /// Fills `out` with every interval where `ray` is inside an object and that overlaps
-    /// `(0, t_max)`, sorted by entry distance. Only objects whose bounding boxes the ray meets
-    /// within `t_max` are tested.
-    pub fn ray_intervals(&self, ray: &Ray, t_max: f64, out: &mut Vec<Interval>) {
-        out.clear();
+    /// Every interval where `ray` is inside an object and that overlaps `(0, t_max)`, sorted by
+    /// entry distance. Only objects whose bounding boxes the ray meets within `t_max` are tested.
+    pub fn ray_intervals<'q>(&self, ray: &Ray, t_max: f64, q: &'q mut RayQuery) -> &'q [Interval] {
+        q.intervals.clear();
         let pray = ParryRay::new(ray.origin, ray.dir);
-        let mut spans = Vec::new();
         for leaf in self.bvh.leaves(|node| node.cast_ray(&pray, t_max) <= t_max) {
-            self.push_object(leaf, ray, t_max, &mut spans, out);
+            self.push_object(leaf, ray, t_max, &mut q.spans, &mut q.intervals);
         }
-        sort_intervals(out);
+        sort_intervals(&mut q.intervals);
+        &q.intervals
     }
 
     /// Same result as [`World::ray_intervals`], testing every object: the reference the
     /// accelerated query is checked against.
-    pub fn ray_intervals_exhaustive(&self, ray: &Ray, t_max: f64, out: &mut Vec<Interval>) {
-        out.clear();
-        let mut spans = Vec::new();
+    pub fn ray_intervals_exhaustive<'q>(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        q: &'q mut RayQuery,
+    ) -> &'q [Interval] {
+        q.intervals.clear();
         for i in 0..self.objects.len() {
-            self.push_object(i as u32, ray, t_max, &mut spans, out);
+            self.push_object(i as u32, ray, t_max, &mut q.spans, &mut q.intervals);
         }
-        sort_intervals(out);
+        sort_intervals(&mut q.intervals);
+        &q.intervals
     }
 
     fn push_object(
@@ -239,11 +250,11 @@ mod tests {
                                         rays in prop::collection::vec(arb_ray(), 1..20),
                                         t_max in 1.0..30.0f64) {
             let world = world_of(shapes);
-            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let (mut a, mut b) = (RayQuery::default(), RayQuery::default());
             for ray in rays {
-                world.ray_intervals(&ray, t_max, &mut a);
-                world.ray_intervals_exhaustive(&ray, t_max, &mut b);
-                prop_assert_eq!(&a, &b);
+                let fast = world.ray_intervals(&ray, t_max, &mut a);
+                let slow = world.ray_intervals_exhaustive(&ray, t_max, &mut b);
+                prop_assert_eq!(fast, slow);
             }
         }
 
