@@ -1,1 +1,283 @@
-fn main(){}
+//! `radarnav`: the command line over the radarnav library.
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use radarnav::demo::{result_figure, share_past_foliage, thesis_experiment};
+use radarnav::render::{Figure, save_png};
+use radarnav::scenario::{BUILTIN_SCENARIOS, MountedSensor, vehicle_footprint};
+use radarnav::sensor::{PRESETS, Tracer, preset};
+use radarnav::{Pose, Scan, Scenario};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+#[derive(Parser)]
+#[command(name = "radarnav", version, about = "Radar navigation workbench: a radar that sees through foliage and smoke, beside a laser that cannot")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// The thesis experiment on foliage-wall: figures 7-10, ground truth, and a table.
+    Demo {
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Seed of the side-beam draws.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Extra scans per sensor for the mean share.
+        #[arg(long, default_value_t = 100)]
+        repeats: usize,
+    },
+    /// List the built-in scenarios.
+    Scenarios,
+    /// List the sensor presets.
+    Presets,
+    /// Draw a scenario's world, with its robots at their start poses.
+    Render {
+        /// A built-in name or a path to a .toml file.
+        scenario: String,
+        /// Output directory (writes SCENARIO.png).
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Longer side of the map area, pixels.
+        #[arg(long, default_value_t = 900)]
+        pixels: u32,
+    },
+    /// One scan: writes scan.png, scan.json and scan.csv.
+    Scan {
+        /// A built-in name or a path to a .toml file.
+        scenario: String,
+        /// A sensor on the robot, or a preset name (mounted like the robot's first sensor).
+        #[arg(long)]
+        sensor: String,
+        /// Robot name (default: the first).
+        #[arg(long)]
+        robot: Option<String>,
+        /// Robot pose `x,y,yaw_deg` (default: its start pose).
+        #[arg(long, allow_hyphen_values = true)]
+        pose: Option<String>,
+        /// Seed (default: the scenario's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Longer side of the map area, pixels.
+        #[arg(long, default_value_t = 900)]
+        pixels: u32,
+    },
+    /// Time scans of every sensor of a scenario's first robot; prints rays per second.
+    Bench {
+        /// A built-in name or a path to a .toml file.
+        #[arg(default_value = "foliage-wall")]
+        scenario: String,
+        /// Scans per sensor.
+        #[arg(long, default_value_t = 200)]
+        scans: usize,
+    },
+}
+
+fn main() {
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo { out, seed, repeats } => demo(&out, seed, repeats),
+        Command::Scenarios => {
+            for (name, _) in BUILTIN_SCENARIOS {
+                let s = Scenario::builtin(name).context("built-in scenario")?;
+                println!("{name:<14} {:>4} objects  {}", s.world.objects().len(), s.description);
+            }
+            Ok(())
+        }
+        Command::Presets => {
+            for p in PRESETS {
+                println!("{:<18} {}", p.name, p.about);
+            }
+            Ok(())
+        }
+        Command::Render { scenario, out, pixels } => {
+            let s = load(&scenario)?;
+            let mut fig = Figure::of_world(&s.world, None, pixels)?;
+            for r in &s.robots {
+                let (l, w) = vehicle_footprint(&r.vehicle);
+                fig.draw_robot(&r.start, l, w);
+            }
+            let path = out.join(format!("{}.png", s.name));
+            create_dir(&out)?;
+            save_png(&fig.finish(&format!("{} - {}", s.name, s.description)), &path)?;
+            println!("wrote {}", path.display());
+            Ok(())
+        }
+        Command::Scan { scenario, sensor, robot, pose, seed, out, pixels } => {
+            scan(&scenario, &sensor, robot.as_deref(), pose.as_deref(), seed, &out, pixels)
+        }
+        Command::Bench { scenario, scans } => bench(&scenario, scans),
+    }
+}
+
+/// A built-in scenario by name, or a TOML file by path.
+fn load(arg: &str) -> Result<Scenario> {
+    let path = Path::new(arg);
+    if path.exists() || arg.ends_with(".toml") {
+        let src = fs::read_to_string(path).with_context(|| format!("reading scenario file {arg}"))?;
+        let name = path.file_stem().map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned());
+        return Ok(Scenario::from_toml(&src, arg, &name)?);
+    }
+    Scenario::builtin(arg).with_context(|| {
+        let names: Vec<&str> = BUILTIN_SCENARIOS.iter().map(|(n, _)| *n).collect();
+        format!("`{arg}` is neither a file nor a built-in scenario ({})", names.join(", "))
+    })
+}
+
+fn create_dir(dir: &Path) -> Result<()> {
+    fs::create_dir_all(dir).with_context(|| format!("creating output directory {}", dir.display()))
+}
+
+fn parse_pose(s: &str) -> Result<Pose> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--pose `{s}`: expected x,y,yaw_deg"))?;
+    match v.as_slice() {
+        [x, y, yaw] if v.iter().all(|a| a.is_finite()) => Ok(Pose::new(*x, *y, 0.0, yaw.to_radians())),
+        _ => bail!("--pose `{s}`: expected three finite numbers x,y,yaw_deg"),
+    }
+}
+
+fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
+    let s = Scenario::builtin("foliage-wall").context("built-in scenario")?;
+    let seed = seed.unwrap_or(s.sim.seed);
+    let results = thesis_experiment(&s, seed, repeats)?;
+    create_dir(out)?;
+    println!("foliage-wall, robot at its start pose, seed {seed}: share of rays that see past the foliage wall");
+    println!("{:<18} {:<18} {:>6} {:>12} {:>16}", "figure", "preset", "rays", "this scan", format!("mean of {}", repeats + 1));
+    for r in &results {
+        let path = out.join(format!("{}.png", r.file));
+        save_png(&result_figure(&s, r, 900)?, &path)?;
+        println!(
+            "{:<18} {:<18} {:>6} {:>11.1}% {:>15.2}%",
+            r.file,
+            r.preset,
+            r.scan.len(),
+            100.0 * r.share_past,
+            100.0 * r.mean_share_past
+        );
+    }
+    println!("figures written to {}", out.display());
+    Ok(())
+}
+
+fn scan(
+    scenario: &str,
+    sensor: &str,
+    robot: Option<&str>,
+    pose: Option<&str>,
+    seed: Option<u64>,
+    out: &Path,
+    pixels: u32,
+) -> Result<()> {
+    let s = load(scenario)?;
+    let r = s.robot(robot).with_context(|| match robot {
+        Some(n) => format!("scenario `{}` has no robot `{n}`", s.name),
+        None => format!("scenario `{}` has no robot", s.name),
+    })?;
+    let mounted = match r.sensor(sensor) {
+        Some(m) => m.clone(),
+        None => {
+            let config = preset(sensor).with_context(|| {
+                let on_robot: Vec<&str> = r.sensors.iter().map(|m| m.name.as_str()).collect();
+                format!(
+                    "`{sensor}` is neither a sensor of robot `{}` ({}) nor a preset (see `radarnav presets`)",
+                    r.name,
+                    on_robot.join(", ")
+                )
+            })?;
+            let mount = r.sensors.first().map_or(Pose::new(0.0, 0.0, 0.4, 0.0), |m| m.mount);
+            MountedSensor { name: sensor.to_owned(), config, mount }
+        }
+    };
+    let robot_pose = pose.map(parse_pose).transpose()?.unwrap_or(r.start);
+    let sensor_pose = robot_pose.compose(&mounted.mount);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.unwrap_or(s.sim.seed));
+    let scan = mounted.config.scan(&s.world, &sensor_pose, 0.0, &mut rng, &mut Tracer::default());
+
+    create_dir(out)?;
+    let mut fig = Figure::of_world(&s.world, None, pixels)?;
+    fig.draw_scan(&scan);
+    let (l, w) = vehicle_footprint(&r.vehicle);
+    fig.draw_robot(&robot_pose, l, w);
+    save_png(&fig.finish(&format!("{} - {}", s.name, mounted.name)), &out.join("scan.png"))?;
+    let materials: Vec<&str> = s.world.materials().iter().map(|(_, m)| m.name.as_str()).collect();
+    let json = serde_json::json!({
+        "scenario": s.name,
+        "robot": r.name,
+        "sensor": mounted.name,
+        "config": mounted.config,
+        "materials": materials,
+        "scan": scan,
+    });
+    fs::write(out.join("scan.json"), serde_json::to_vec_pretty(&json)?).context("writing scan.json")?;
+    write_csv(&out.join("scan.csv"), &scan, &materials)?;
+    let share = share_past_foliage(&s.world, &scan);
+    let returns = scan.ranges.iter().filter(|r| r.is_finite()).count();
+    println!(
+        "{} rays, {} returns, {:.1}% see past foliage; wrote scan.png, scan.json, scan.csv to {}",
+        scan.len(),
+        returns,
+        100.0 * share,
+        out.display()
+    );
+    Ok(())
+}
+
+fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
+    let mut w = std::io::BufWriter::new(fs::File::create(path).with_context(|| format!("creating {}", path.display()))?);
+    writeln!(w, "index,azimuth_deg,elevation_deg,range_m,hit,material,beam")?;
+    for i in 0..scan.len() {
+        let (az, el) = scan.angles(i);
+        let material = scan.materials[i].map_or("", |m| materials[m.0 as usize]);
+        writeln!(
+            w,
+            "{i},{:.6},{:.6},{},{},{material},{}",
+            az.to_degrees(),
+            el.to_degrees(),
+            scan.ranges[i],
+            scan.hits[i].as_str(),
+            scan.beams[i].as_str()
+        )?;
+    }
+    w.flush().with_context(|| format!("writing {}", path.display()))
+}
+
+fn bench(scenario: &str, scans: usize) -> Result<()> {
+    let s = load(scenario)?;
+    let r = s.robot(None).with_context(|| format!("scenario `{}` has no robot", s.name))?;
+    let mut tracer = Tracer::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(s.sim.seed);
+    println!("{} ({} objects), {} scans per sensor, one thread:", s.name, s.world.objects().len(), scans);
+    for m in &r.sensors {
+        let pose = r.start.compose(&m.mount);
+        let t0 = Instant::now();
+        let mut rays = 0usize;
+        for k in 0..scans.max(1) {
+            rays += m.config.scan(&s.world, &pose, k as f64, &mut rng, &mut tracer).len();
+        }
+        let secs = t0.elapsed().as_secs_f64();
+        println!("  {:<10} {:>8.0} rays/s  ({rays} rays in {secs:.3} s)", m.name, rays as f64 / secs);
+    }
+    Ok(())
+}

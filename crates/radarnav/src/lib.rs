@@ -5,8 +5,14 @@
 //! Modules: [`world`] (shapes, materials, ray intervals), [`scenario`] (TOML files and the
 //! built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`render`] (figures).
 
+pub mod demo;
 pub mod pose;
+pub mod render;
+pub mod scenario;
 pub mod sensor;
 pub mod world;
 
 pub use pose::Pose;
+pub use scenario::{Scenario, ScenarioError};
+pub use sensor::{Scan, SensorConfig};
+pub use world::World;

@@ -82,9 +82,10 @@ impl Preset {
 }
 
 /// The radar budget tuned to the `foliage-wall` map: 3 dB = 1 m of `foliage_dense` (3 dB/m)
-/// or about 1.9 m of `foliage_light`. The wall's spheres have 1.6 m wide cross-sections at
-/// scan height, so rays through their cores fade inside while rays through their thin edges
-/// come out on the far side, as in the thesis' figure 8.
+/// or about 1.9 m of `foliage_light` (1.55 dB/m). The wall's dense spheres are 1.6 m across at
+/// scan height, so rays through their cores fade inside, while rays through their thin edges
+/// and through the light filler spheres (at most 1 m across) come out on the far side, as in
+/// the thesis' figure 8.
 pub const THESIS_PENETRATION_DB: f64 = 3.0;
 
 /// Signal margin given to the laser presets for non-opaque media (dust, glass).

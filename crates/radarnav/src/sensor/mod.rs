@@ -31,6 +31,15 @@ pub enum Beam {
 }
 
 impl Beam {
+    /// Lowercase name, as in files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Center => "center",
+            Self::Left => "left",
+            Self::Right => "right",
+        }
+    }
+
     /// Signed multiple of the side-beam offset, towards the ray's left.
     pub fn side(self) -> f64 {
         match self {

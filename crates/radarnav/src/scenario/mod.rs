@@ -1,0 +1,412 @@
+//! Scenario files (TOML, DESIGN §2) and the built-in scenarios.
+//!
+//! ```toml
+//! description = "what it is for"
+//! [sim]
+//! seed = 1
+//! [[material]]
+//! name = "wet_hedge"
+//! base = "foliage_dense"
+//! radar_attenuation_db_per_m = 7.0
+//! [[object]]
+//! name = "bush"
+//! material = "wet_hedge"
+//! sphere = { center = [3.0, 1.0], radius = 0.8 }   # [x, y] rests it on the ground
+//! [[robot]]
+//! name = "p3at"
+//! start = { x = 0.0, y = 0.0, yaw_deg = 0.0 }
+//! [[robot.sensor]]
+//! name = "radar"
+//! preset = "radar_thesis"
+//! mount = { z = 0.4 }
+//! ```
+
+mod builtin;
+pub mod spec;
+
+pub use builtin::{BUILTIN_SCENARIOS, builtin_source};
+
+use glam::{DVec2, DVec3};
+use std::ops::Range;
+use thiserror::Error;
+use toml::Spanned;
+
+use crate::pose::Pose;
+use crate::sensor::{SensorConfig, preset};
+use crate::world::{Material, MaterialTable, Object, Shape, World};
+use spec::{Center, ObjectSpec, ScenarioSpec, SensorSpec, Xy};
+
+/// A scenario file that could not be used: where, which key, and what is wrong.
+#[derive(Debug, Error, PartialEq)]
+#[error("{file}:{line}:{column}: {}{message}", key.as_ref().map(|k| format!("`{k}`: ")).unwrap_or_default())]
+pub struct ScenarioError {
+    /// File name as given by the caller.
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column (in characters).
+    pub column: usize,
+    /// The key at fault, when one is.
+    pub key: Option<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Simulation settings of a scenario.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimSettings {
+    /// Step, s.
+    pub dt: f64,
+    /// Run length, s.
+    pub duration: f64,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+/// A sensor on a robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MountedSensor {
+    /// Unique on its robot.
+    pub name: String,
+    /// Parameters.
+    pub config: SensorConfig,
+    /// Pose relative to the robot (z above the ground).
+    pub mount: Pose,
+}
+
+/// A robot of the scenario.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Robot {
+    /// Unique name.
+    pub name: String,
+    /// Vehicle preset.
+    pub vehicle: String,
+    /// Start pose on the ground (z = 0).
+    pub start: Pose,
+    /// Its sensors.
+    pub sensors: Vec<MountedSensor>,
+}
+
+impl Robot {
+    /// The sensor called `name`.
+    pub fn sensor(&self, name: &str) -> Option<&MountedSensor> {
+        self.sensors.iter().find(|s| s.name == name)
+    }
+}
+
+/// A loaded scenario.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    /// Name: the built-in's name or the file stem.
+    pub name: String,
+    /// One line saying what it is for.
+    pub description: String,
+    /// Simulation settings.
+    pub sim: SimSettings,
+    /// Objects and materials.
+    pub world: World,
+    /// Robots.
+    pub robots: Vec<Robot>,
+}
+
+/// Vehicle presets known so far: (name, footprint length, footprint width) in metres.
+/// P3AT: 0.508 × 0.497 m (Adept MobileRobots datasheet).
+pub const VEHICLES: &[(&str, f64, f64)] = &[("p3at", 0.508, 0.497)];
+
+/// Footprint (length, width) of a vehicle preset; the P3AT's for an unknown name.
+pub fn vehicle_footprint(name: &str) -> (f64, f64) {
+    let v = VEHICLES.iter().find(|v| v.0 == name).unwrap_or(&VEHICLES[0]);
+    (v.1, v.2)
+}
+
+struct Ctx<'a> {
+    src: &'a str,
+    file: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, span: Range<usize>, key: Option<&str>, message: impl Into<String>) -> ScenarioError {
+        let start = span.start.min(self.src.len());
+        let before = &self.src[..start];
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        ScenarioError {
+            file: self.file.to_owned(),
+            line,
+            column,
+            key: key.map(str::to_owned).or_else(|| key_at(self.src, &span)),
+            message: message.into(),
+        }
+    }
+}
+
+/// The key a span points at: the span itself when it is a bare key, else the key written
+/// before `=` on the span's line.
+fn key_at(src: &str, span: &Range<usize>) -> Option<String> {
+    let is_key = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+    let text = src.get(span.clone())?;
+    if !text.is_empty() && text.chars().all(is_key) && !text.chars().all(|c| c.is_ascii_digit()) {
+        let after = src[span.end..].trim_start();
+        if after.starts_with('=') {
+            return Some(text.to_owned());
+        }
+    }
+    let line_start = src[..span.start].rfind('\n').map_or(0, |i| i + 1);
+    let head = src[line_start..span.start].trim_end().strip_suffix('=')?.trim_end();
+    let key: String = head.chars().rev().take_while(|&c| is_key(c)).collect();
+    (!key.is_empty()).then(|| key.chars().rev().collect())
+}
+
+impl Scenario {
+    /// Parses and checks a scenario. `file` is only used in error messages.
+    pub fn from_toml(src: &str, file: &str, name: &str) -> Result<Scenario, ScenarioError> {
+        let ctx = Ctx { src, file };
+        let spec: ScenarioSpec = toml::from_str(src).map_err(|e| {
+            ctx.err(e.span().unwrap_or(0..0), None, e.message().trim_end().to_owned())
+        })?;
+        let materials = build_materials(&ctx, &spec)?;
+        let objects = spec
+            .objects
+            .iter()
+            .map(|o| build_object(&ctx, &materials, o))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut robots: Vec<Robot> = Vec::new();
+        for r in &spec.robots {
+            let robot = build_robot(&ctx, r)?;
+            if robots.iter().any(|x| x.name == robot.name) {
+                return Err(ctx.err(r.span(), Some("name"), format!("robot name `{}` is used twice", robot.name)));
+            }
+            robots.push(robot);
+        }
+        Ok(Scenario {
+            name: name.to_owned(),
+            description: spec.description,
+            sim: SimSettings {
+                dt: spec.sim.dt.0,
+                duration: spec.sim.duration.0,
+                seed: spec.sim.seed,
+            },
+            world: World::new(materials, objects),
+            robots,
+        })
+    }
+
+    /// A built-in scenario by name.
+    pub fn builtin(name: &str) -> Option<Scenario> {
+        let src = builtin_source(name)?;
+        // The built-ins are tested to parse, so an error here is a bug in this crate.
+        Some(
+            Self::from_toml(src, &format!("scenarios/{name}.toml"), name)
+                .unwrap_or_else(|e| panic!("built-in scenario is invalid: {e}")),
+        )
+    }
+
+    /// The robot called `name`, or the first robot when `name` is `None`.
+    pub fn robot(&self, name: Option<&str>) -> Option<&Robot> {
+        match name {
+            Some(n) => self.robots.iter().find(|r| r.name == n),
+            None => self.robots.first(),
+        }
+    }
+}
+
+fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, ScenarioError> {
+    let mut table = MaterialTable::default();
+    let mut seen: Vec<&str> = Vec::new();
+    for m in &spec.materials {
+        let span = m.span();
+        let m = m.get_ref();
+        if seen.contains(&m.name.as_str()) {
+            return Err(ctx.err(span, Some("name"), format!("material `{}` is defined twice", m.name)));
+        }
+        seen.push(&m.name);
+        let base = match &m.base {
+            Some(b) => {
+                let id = table.id(b.get_ref()).ok_or_else(|| {
+                    ctx.err(b.span(), Some("base"), unknown_material(b.get_ref(), &table))
+                })?;
+                Some(table.get(id).clone())
+            }
+            None => None,
+        };
+        let radar = m
+            .radar_attenuation_db_per_m
+            .map(|v| v.0)
+            .or(base.as_ref().map(|b| b.radar_attenuation_db_per_m))
+            .ok_or_else(|| {
+                ctx.err(span.clone(), None, "missing field `radar_attenuation_db_per_m` (or a `base` material to take it from)")
+            })?;
+        let color = match &m.color {
+            Some(c) => parse_color(c.get_ref())
+                .ok_or_else(|| ctx.err(c.span(), Some("color"), format!("expected \"#rrggbb\", found \"{}\"", c.get_ref())))?,
+            None => base.as_ref().map_or_else(|| hashed_color(&m.name), |b| b.color),
+        };
+        let laser_opaque = m.laser_opaque.or(base.as_ref().map(|b| b.laser_opaque)).unwrap_or(true);
+        let material = Material {
+            name: m.name.clone(),
+            radar_attenuation_db_per_m: radar,
+            radar_reflectivity: m
+                .radar_reflectivity
+                .map(|v| v.0)
+                .or(base.as_ref().map(|b| b.radar_reflectivity))
+                .unwrap_or(0.5),
+            specular: m.specular.or(base.as_ref().map(|b| b.specular)).unwrap_or(false),
+            laser_opaque,
+            laser_attenuation_db_per_m: m
+                .laser_attenuation_db_per_m
+                .map(|v| v.0)
+                .or(base.as_ref().map(|b| b.laser_attenuation_db_per_m))
+                .unwrap_or(if laser_opaque { f64::INFINITY } else { 0.0 }),
+            traversable: m.traversable.or(base.as_ref().map(|b| b.traversable)).unwrap_or(false),
+            color,
+        };
+        table
+            .insert(material)
+            .ok_or_else(|| ctx.err(span, None, "too many materials (at most 65535)"))?;
+    }
+    Ok(table)
+}
+
+fn unknown_material(name: &str, table: &MaterialTable) -> String {
+    format!("unknown material `{name}`; known: {}", table.names().join(", "))
+}
+
+fn parse_color(s: &str) -> Option<[u8; 3]> {
+    let hex = s.strip_prefix('#')?;
+    if hex.len() != 6 || !hex.is_ascii() {
+        return None;
+    }
+    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
+    Some([byte(0)?, byte(2)?, byte(4)?])
+}
+
+/// A stable colour for a user material without one (FNV-1a of the name).
+fn hashed_color(name: &str) -> [u8; 3] {
+    let h = name
+        .bytes()
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3));
+    [64 + (h & 0x7f) as u8, 64 + ((h >> 8) & 0x7f) as u8, 64 + ((h >> 16) & 0x7f) as u8]
+}
+
+fn center(c: &Center, rest_height: f64) -> DVec3 {
+    DVec3::new(c.xy[0], c.xy[1], c.z.unwrap_or(rest_height))
+}
+
+fn xy(points: &[Xy]) -> Vec<DVec2> {
+    points.iter().map(|p| DVec2::new(p[0].0, p[1].0)).collect()
+}
+
+fn build_object(ctx: &Ctx, materials: &MaterialTable, o: &Spanned<ObjectSpec>) -> Result<Object, ScenarioError> {
+    let span = o.span();
+    let spec = o.get_ref();
+    let material = materials.id(spec.material.get_ref()).ok_or_else(|| {
+        ctx.err(spec.material.span(), Some("material"), unknown_material(spec.material.get_ref(), materials))
+    })?;
+    let given = [
+        spec.sphere.is_some(),
+        spec.cuboid.is_some(),
+        spec.cylinder.is_some(),
+        spec.wall.is_some(),
+        spec.prism.is_some(),
+    ]
+    .iter()
+    .filter(|g| **g)
+    .count();
+    if given != 1 {
+        return Err(ctx.err(
+            span,
+            None,
+            format!("an object needs exactly one shape (sphere, box, cylinder, wall or prism), found {given}"),
+        ));
+    }
+    let (shape, shape_span) = if let Some(s) = &spec.sphere {
+        (Shape::sphere(center(&s.center, s.radius.0), s.radius.0), span.clone())
+    } else if let Some(b) = &spec.cuboid {
+        let size = DVec3::new(b.size[0].0, b.size[1].0, b.size[2].0);
+        (Shape::cuboid(center(&b.center, size.z / 2.0), size, b.yaw_deg.0.to_radians()), span.clone())
+    } else if let Some(c) = &spec.cylinder {
+        (Shape::cylinder(center(&c.center, c.height.0 / 2.0), c.radius.0, c.height.0), span.clone())
+    } else if let Some(w) = &spec.wall {
+        let ws = w.get_ref();
+        (Shape::wall(xy(&ws.points), ws.thickness.0, ws.height.0), w.span())
+    } else if let Some(p) = &spec.prism {
+        let ps = p.get_ref();
+        (Shape::prism(xy(&ps.polygon), ps.z_min.0, ps.z_max.0), p.span())
+    } else {
+        unreachable!("exactly one shape was checked above")
+    };
+    let shape = shape.map_err(|e| ctx.err(shape_span, None, e.to_string()))?;
+    Ok(Object {
+        name: spec.name.clone(),
+        shape,
+        material,
+    })
+}
+
+fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, ScenarioError> {
+    let spec = r.get_ref();
+    if !VEHICLES.iter().any(|v| v.0 == spec.vehicle.get_ref()) {
+        let known: Vec<&str> = VEHICLES.iter().map(|v| v.0).collect();
+        return Err(ctx.err(
+            spec.vehicle.span(),
+            Some("vehicle"),
+            format!("unknown vehicle `{}`; known: {}", spec.vehicle.get_ref(), known.join(", ")),
+        ));
+    }
+    let mut sensors: Vec<MountedSensor> = Vec::new();
+    for s in &spec.sensors {
+        let sensor = build_sensor(ctx, s)?;
+        if sensors.iter().any(|x| x.name == sensor.name) {
+            return Err(ctx.err(s.span(), Some("name"), format!("sensor name `{}` is used twice on robot `{}`", sensor.name, spec.name)));
+        }
+        sensors.push(sensor);
+    }
+    Ok(Robot {
+        name: spec.name.clone(),
+        vehicle: spec.vehicle.get_ref().clone(),
+        start: Pose::new(spec.start.x.0, spec.start.y.0, 0.0, spec.start.yaw_deg.0.to_radians()),
+        sensors,
+    })
+}
+
+fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, ScenarioError> {
+    let spec = s.get_ref();
+    let mut c = preset(spec.preset.get_ref()).ok_or_else(|| {
+        let known: Vec<&str> = crate::sensor::PRESETS.iter().map(|p| p.name).collect();
+        ctx.err(
+            spec.preset.span(),
+            Some("preset"),
+            format!("unknown sensor preset `{}`; known: {}", spec.preset.get_ref(), known.join(", ")),
+        )
+    })?;
+    let set = |field: &mut f64, v: Option<f64>| {
+        if let Some(v) = v {
+            *field = v;
+        }
+    };
+    set(&mut c.fov, spec.fov_deg.map(|v| v.0.to_radians()));
+    set(&mut c.resolution, spec.resolution_deg.map(|v| v.0.to_radians()));
+    set(&mut c.range_min, spec.range_min.map(|v| v.0));
+    set(&mut c.range_max, spec.range_max.map(|v| v.0));
+    set(&mut c.rate_hz, spec.rate_hz.map(|v| v.0));
+    set(&mut c.range_noise_std, spec.range_noise_std.map(|v| v.0));
+    set(&mut c.range_noise_rel, spec.range_noise_rel.map(|v| v.0));
+    set(&mut c.penetration_db, spec.penetration_db.map(|v| v.0));
+    set(&mut c.side_beam_offset, spec.side_beam_offset.map(|v| v.0));
+    if let Some(el) = &spec.elevations_deg {
+        c.elevations = el.iter().map(|e| e.0.to_radians()).collect();
+    }
+    c.validate().map_err(|msg| {
+        let key = msg.split_whitespace().next().map(str::to_owned);
+        ctx.err(s.span(), key.as_deref(), format!("sensor `{}`: {msg}", spec.name))
+    })?;
+    let m = &spec.mount;
+    Ok(MountedSensor {
+        name: spec.name.clone(),
+        config: c,
+        mount: Pose::new(m.x.0, m.y.0, m.z.0, m.yaw_deg.0.to_radians()),
+    })
+}
+
+#[cfg(test)]
+mod tests;

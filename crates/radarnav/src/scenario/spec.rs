@@ -1,0 +1,328 @@
+//! The serde shape of a scenario file (DESIGN §2). Values are range-checked while they are
+//! read, so a bad value is reported at its own line and column.
+
+use serde::de::{Deserializer, Error as _};
+use serde::Deserialize;
+use toml::Spanned;
+
+macro_rules! checked_f64 {
+    ($(#[$doc:meta] $name:ident: $ok:expr, $what:literal;)*) => {$(
+        #[$doc]
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct $name(pub f64);
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let v = f64::deserialize(d)?;
+                let ok: fn(f64) -> bool = $ok;
+                if ok(v) {
+                    Ok(Self(v))
+                } else {
+                    Err(D::Error::custom(format!("expected {}, found {v}", $what)))
+                }
+            }
+        }
+    )*};
+}
+
+checked_f64! {
+    /// A finite number.
+    Finite: f64::is_finite, "a finite number";
+    /// A finite number > 0.
+    Positive: |v| v.is_finite() && v > 0.0, "a finite number > 0";
+    /// A number ≥ 0; `inf` allowed (a solid's attenuation).
+    NonNegative: |v| v >= 0.0, "a number >= 0";
+    /// A number in [0, 1].
+    Fraction: |v| (0.0..=1.0).contains(&v), "a number from 0 to 1";
+}
+
+/// A point `[x, y]` (resting on the ground) or `[x, y, z]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Center {
+    /// x, y.
+    pub xy: [f64; 2],
+    /// z when given.
+    pub z: Option<f64>,
+}
+
+impl<'de> Deserialize<'de> for Center {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<Finite>::deserialize(d)?;
+        match v.as_slice() {
+            [x, y] => Ok(Self { xy: [x.0, y.0], z: None }),
+            [x, y, z] => Ok(Self { xy: [x.0, y.0], z: Some(z.0) }),
+            _ => Err(D::Error::custom(format!(
+                "expected [x, y] (resting on the ground) or [x, y, z], found {} numbers",
+                v.len()
+            ))),
+        }
+    }
+}
+
+/// A point in the xy plane.
+pub type Xy = [Finite; 2];
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSpec {
+    /// One line saying what the scenario is for.
+    #[serde(default)]
+    pub description: String,
+    /// Simulation settings.
+    #[serde(default)]
+    pub sim: SimSpec,
+    /// User-defined materials.
+    #[serde(default, rename = "material")]
+    pub materials: Vec<Spanned<MaterialSpec>>,
+    /// Objects.
+    #[serde(default, rename = "object")]
+    pub objects: Vec<Spanned<ObjectSpec>>,
+    /// Robots.
+    #[serde(default, rename = "robot")]
+    pub robots: Vec<Spanned<RobotSpec>>,
+}
+
+/// `[sim]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimSpec {
+    /// Step, seconds.
+    #[serde(default = "default_dt")]
+    pub dt: Positive,
+    /// Length of a run, seconds.
+    #[serde(default = "default_duration")]
+    pub duration: Positive,
+    /// Seed of the run's RNG.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn default_dt() -> Positive {
+    Positive(0.05)
+}
+
+fn default_duration() -> Positive {
+    Positive(60.0)
+}
+
+impl Default for SimSpec {
+    fn default() -> Self {
+        Self {
+            dt: default_dt(),
+            duration: default_duration(),
+            seed: 0,
+        }
+    }
+}
+
+/// `[[material]]`: a new material, or a variant of `base` with some fields changed.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Unique name; re-using a built-in's name replaces it.
+    pub name: String,
+    /// Material whose values the unset fields take.
+    pub base: Option<Spanned<String>>,
+    /// One-way dB/m; `inf` for a solid.
+    pub radar_attenuation_db_per_m: Option<NonNegative>,
+    /// Power fraction reflected at entry.
+    pub radar_reflectivity: Option<Fraction>,
+    /// Mirror-like to radar.
+    pub specular: Option<bool>,
+    /// Stops a laser at its surface.
+    pub laser_opaque: Option<bool>,
+    /// Laser dB/m when not opaque.
+    pub laser_attenuation_db_per_m: Option<NonNegative>,
+    /// A robot may drive through.
+    pub traversable: Option<bool>,
+    /// `"#rrggbb"` for figures.
+    pub color: Option<Spanned<String>>,
+}
+
+/// `[[object]]`: a name, a material and exactly one shape table.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// Optional name.
+    pub name: Option<String>,
+    /// Material name.
+    pub material: Spanned<String>,
+    /// `sphere = { center, radius }`.
+    pub sphere: Option<SphereSpec>,
+    /// `box = { center, size, yaw_deg }`.
+    #[serde(rename = "box")]
+    pub cuboid: Option<BoxSpec>,
+    /// `cylinder = { center, radius, height }`.
+    pub cylinder: Option<CylinderSpec>,
+    /// `wall = { points, thickness, height }`.
+    pub wall: Option<Spanned<WallSpec>>,
+    /// `prism = { polygon, z_min, z_max }`.
+    pub prism: Option<Spanned<PrismSpec>>,
+}
+
+/// Sphere fields.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    /// Centre; `[x, y]` rests it on the ground.
+    pub center: Center,
+    /// Radius, m.
+    pub radius: Positive,
+}
+
+/// Box fields.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Centre; `[x, y]` rests it on the ground.
+    pub center: Center,
+    /// Full size along its own axes, m.
+    pub size: [Positive; 3],
+    /// Rotation about z, degrees.
+    #[serde(default = "zero")]
+    pub yaw_deg: Finite,
+}
+
+fn zero() -> Finite {
+    Finite(0.0)
+}
+
+/// Cylinder fields.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CylinderSpec {
+    /// Centre of the axis; `[x, y]` stands it on the ground.
+    pub center: Center,
+    /// Radius, m.
+    pub radius: Positive,
+    /// Height, m.
+    pub height: Positive,
+}
+
+/// Wall fields.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// Polyline of the wall's centre line.
+    pub points: Vec<Xy>,
+    /// Thickness, m.
+    pub thickness: Positive,
+    /// Height, m.
+    pub height: Positive,
+}
+
+/// Prism fields.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrismSpec {
+    /// Polygon in the xy plane.
+    pub polygon: Vec<Xy>,
+    /// Bottom, m (default 0).
+    #[serde(default = "zero")]
+    pub z_min: Finite,
+    /// Top, m.
+    pub z_max: Finite,
+}
+
+/// `[[robot]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Unique name.
+    pub name: String,
+    /// Vehicle preset.
+    #[serde(default = "default_vehicle")]
+    pub vehicle: Spanned<String>,
+    /// Start pose.
+    pub start: PlanarPose,
+    /// `[[robot.sensor]]` entries.
+    #[serde(default, rename = "sensor")]
+    pub sensors: Vec<Spanned<SensorSpec>>,
+}
+
+fn default_vehicle() -> Spanned<String> {
+    Spanned::new(0..0, "p3at".to_owned())
+}
+
+/// `{ x, y, yaw_deg }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanarPose {
+    /// m.
+    pub x: Finite,
+    /// m.
+    pub y: Finite,
+    /// Degrees.
+    #[serde(default = "zero")]
+    pub yaw_deg: Finite,
+}
+
+/// `{ x, y, z, yaw_deg }` relative to the robot.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MountSpec {
+    /// m forward.
+    #[serde(default = "zero")]
+    pub x: Finite,
+    /// m left.
+    #[serde(default = "zero")]
+    pub y: Finite,
+    /// m above the ground.
+    #[serde(default = "default_mount_z")]
+    pub z: Finite,
+    /// Degrees.
+    #[serde(default = "zero")]
+    pub yaw_deg: Finite,
+}
+
+/// Height of a sensor on top of a P3AT (0.277 m body) on a small post.
+pub const DEFAULT_MOUNT_Z: f64 = 0.4;
+
+fn default_mount_z() -> Finite {
+    Finite(DEFAULT_MOUNT_Z)
+}
+
+impl Default for MountSpec {
+    fn default() -> Self {
+        Self {
+            x: zero(),
+            y: zero(),
+            z: default_mount_z(),
+            yaw_deg: zero(),
+        }
+    }
+}
+
+/// `[[robot.sensor]]`: a preset plus overrides.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSpec {
+    /// Unique on the robot.
+    pub name: String,
+    /// A preset name (see `radarnav presets`).
+    pub preset: Spanned<String>,
+    /// Pose on the robot.
+    #[serde(default)]
+    pub mount: MountSpec,
+    /// Override: field of view, degrees.
+    pub fov_deg: Option<Positive>,
+    /// Override: angular step, degrees.
+    pub resolution_deg: Option<Positive>,
+    /// Override, m.
+    pub range_min: Option<NonNegative>,
+    /// Override, m.
+    pub range_max: Option<Positive>,
+    /// Override, Hz.
+    pub rate_hz: Option<Positive>,
+    /// Override: scan planes, degrees.
+    pub elevations_deg: Option<Vec<Finite>>,
+    /// Override, m.
+    pub range_noise_std: Option<NonNegative>,
+    /// Override, fraction of range.
+    pub range_noise_rel: Option<NonNegative>,
+    /// Override, dB.
+    pub penetration_db: Option<Positive>,
+    /// Override, m.
+    pub side_beam_offset: Option<NonNegative>,
+}

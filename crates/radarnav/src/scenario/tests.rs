@@ -1,0 +1,166 @@
+use super::*;
+
+const ROBOT: &str = "[[robot]]\nname = \"r\"\nstart = { x = 1.0, y = 2.0 }\n";
+
+fn parse(src: &str) -> Result<Scenario, ScenarioError> {
+    Scenario::from_toml(src, "test.toml", "test")
+}
+
+fn err(src: &str) -> ScenarioError {
+    match parse(src) {
+        Ok(_) => panic!("expected an error for:\n{src}"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn builtins_parse_and_have_robots_with_radar_and_laser() {
+    for (name, _) in BUILTIN_SCENARIOS {
+        let s = Scenario::builtin(name).unwrap();
+        assert!(!s.description.is_empty(), "{name}");
+        let robot = s.robot(None).unwrap();
+        assert!(robot.sensor("radar").is_some() && robot.sensor("laser").is_some(), "{name}");
+        assert!(!s.world.objects().is_empty());
+    }
+    assert!(Scenario::builtin("nope").is_none());
+}
+
+#[test]
+fn resting_centres_and_defaults() {
+    let s = parse(&format!(
+        "[[object]]\nmaterial = \"wood\"\nsphere = {{ center = [1, 2], radius = 0.5 }}\n\
+         [[object]]\nmaterial = \"wood\"\nbox = {{ center = [0, 0], size = [1, 1, 2] }}\n\
+         [[object]]\nmaterial = \"wood\"\ncylinder = {{ center = [0, 0, 3], radius = 1, height = 2 }}\n{ROBOT}"
+    ))
+    .unwrap();
+    let objs = s.world.objects();
+    assert_eq!(objs[0].shape.aabb().0.z, 0.0);
+    assert_eq!(objs[1].shape.aabb().0.z, 0.0);
+    assert_eq!(objs[2].shape.aabb().0.z, 2.0);
+    assert_eq!(s.sim.dt, 0.05);
+    assert_eq!(s.robots[0].start, Pose::new(1.0, 2.0, 0.0, 0.0));
+    assert_eq!(s.robots[0].vehicle, "p3at");
+}
+
+#[test]
+fn user_material_with_base_and_override() {
+    let s = parse(
+        "[[material]]\nname = \"wet\"\nbase = \"foliage_dense\"\nradar_attenuation_db_per_m = 7.0\n\
+         [[material]]\nname = \"mine\"\nradar_attenuation_db_per_m = inf\ncolor = \"#102030\"\n\
+         [[object]]\nmaterial = \"wet\"\nsphere = { center = [0, 0], radius = 1 }\n",
+    )
+    .unwrap();
+    let t = s.world.materials();
+    let wet = t.get(t.id("wet").unwrap());
+    assert_eq!(wet.radar_attenuation_db_per_m, 7.0);
+    assert!(wet.laser_opaque && !wet.traversable);
+    let mine = t.get(t.id("mine").unwrap());
+    assert!(mine.radar_attenuation_db_per_m.is_infinite());
+    assert_eq!(mine.color, [0x10, 0x20, 0x30]);
+}
+
+#[test]
+fn sensor_overrides_apply() {
+    let s = parse(&format!(
+        "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"sick_lms291\"\nresolution_deg = 0.5\n\
+         elevations_deg = [-2, 0, 2]\nmount = {{ x = 0.2, z = 0.5, yaw_deg = 90 }}\n"
+    ))
+    .unwrap();
+    let sensor = s.robots[0].sensor("s").unwrap();
+    assert_eq!(sensor.config.azimuth_count(), 361);
+    assert_eq!(sensor.config.elevations.len(), 3);
+    assert!((sensor.mount.yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    assert_eq!(sensor.mount.z, 0.5);
+}
+
+#[test]
+fn unknown_key_names_file_line_column_and_key() {
+    let e = err("description = \"x\"\n[[object]]\nmaterial = \"wood\"\nradius = 2\n");
+    assert_eq!((e.file.as_str(), e.line, e.column), ("test.toml", 4, 1));
+    assert_eq!(e.key.as_deref(), Some("radius"));
+    assert!(e.message.contains("unknown field"), "{e}");
+    let e = err("colour = 1\n");
+    assert_eq!((e.line, e.key.as_deref()), (1, Some("colour")));
+}
+
+#[test]
+fn out_of_range_value_points_at_the_value() {
+    let e = err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0], radius = -1.5 }\n");
+    assert_eq!((e.line, e.column), (3, 38), "{e}");
+    assert_eq!(e.key.as_deref(), Some("radius"));
+    assert!(e.message.contains("> 0") && e.message.contains("-1.5"), "{e}");
+    assert_eq!(e.to_string(), format!("test.toml:3:38: `radius`: {}", e.message));
+}
+
+#[test]
+fn unknown_material_lists_the_known_ones() {
+    let e = err("[[object]]\nmaterial = \"granite\"\nsphere = { center = [0, 0], radius = 1 }\n");
+    assert_eq!((e.line, e.column, e.key.as_deref()), (2, 12, Some("material")));
+    assert!(e.message.contains("granite") && e.message.contains("foliage_dense"), "{e}");
+    let e = err("[[material]]\nname = \"x\"\nbase = \"granite\"\n");
+    assert_eq!((e.line, e.key.as_deref()), (3, Some("base")));
+}
+
+#[test]
+fn shape_count_must_be_one() {
+    let e = err("[[object]]\nmaterial = \"wood\"\n");
+    assert!(e.message.contains("found 0"), "{e}");
+    let e = err(
+        "[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0], radius = 1 }\n\
+         cylinder = { center = [0, 0], radius = 1, height = 1 }\n",
+    );
+    assert!(e.message.contains("found 2"), "{e}");
+}
+
+#[test]
+fn geometric_errors_come_from_the_shape_table() {
+    let e = err("[[object]]\nmaterial = \"wood\"\nwall = { points = [[0, 0], [0, 0]], thickness = 0.1, height = 1 }\n");
+    assert_eq!(e.line, 3);
+    assert!(e.message.contains("equal consecutive points"), "{e}");
+    let e = err("[[object]]\nmaterial = \"wood\"\nprism = { polygon = [[0, 0], [1, 0], [0, 1]], z_min = 1, z_max = 0.5 }\n");
+    assert!(e.message.contains("z_max"), "{e}");
+    let e = err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0, 0, 0], radius = 1 }\n");
+    assert_eq!(e.key.as_deref(), Some("center"));
+    assert!(e.message.contains("found 4 numbers"), "{e}");
+}
+
+#[test]
+fn syntax_and_type_errors() {
+    let e = err("[sim]\ndt = \n");
+    assert_eq!(e.line, 2, "{e}");
+    let e = err("[sim]\nseed = \"one\"\n");
+    assert_eq!((e.line, e.key.as_deref()), (2, Some("seed")), "{e}");
+    let e = err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0] }\n");
+    assert!(e.message.contains("missing field `radius`"), "{e}");
+}
+
+#[test]
+fn sensor_errors() {
+    let e = err(&format!("{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"velodyne\"\n"));
+    assert_eq!((e.line, e.key.as_deref()), (6, Some("preset")));
+    assert!(e.message.contains("hokuyo_urg04lx"), "{e}");
+    let e = err(&format!(
+        "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"sick_lms291\"\nrange_min = 100\n"
+    ));
+    assert_eq!(e.key.as_deref(), Some("range_min"));
+    assert!(e.message.contains("below range_max"), "{e}");
+    let e = err(&format!(
+        "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"radar_thesis\"\n\
+         [[robot.sensor]]\nname = \"s\"\npreset = \"radar_thesis\"\n"
+    ));
+    assert!(e.message.contains("used twice"), "{e}");
+    let e = err(&format!("{ROBOT}[[robot]]\nname = \"r\"\nstart = {{ x = 0, y = 0 }}\n"));
+    assert!(e.message.contains("robot name `r` is used twice"), "{e}");
+    let e = err("[[robot]]\nname = \"r\"\nvehicle = \"tank\"\nstart = { x = 0, y = 0 }\n");
+    assert_eq!((e.line, e.key.as_deref()), (3, Some("vehicle")));
+}
+
+#[test]
+fn bad_colour_and_duplicate_material() {
+    let e = err("[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\ncolor = \"red\"\n");
+    assert_eq!((e.line, e.key.as_deref()), (4, Some("color")));
+    let e = err("[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\n[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\n");
+    assert!(e.message.contains("defined twice"), "{e}");
+    let e = err("[[material]]\nname = \"m\"\n");
+    assert!(e.message.contains("radar_attenuation_db_per_m"), "{e}");
+}
