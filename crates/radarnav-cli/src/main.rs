@@ -16,7 +16,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 #[derive(Parser)]
-#[command(name = "radarnav", version, about = "Radar navigation workbench: a radar that sees through foliage and smoke, beside a laser that cannot")]
+#[command(
+    name = "radarnav",
+    version,
+    about = "Radar navigation workbench: a radar that sees through foliage and smoke, beside a laser that cannot"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -85,8 +89,23 @@ enum Command {
     },
 }
 
+/// `println!` that returns an error instead of panicking when stdout is closed.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    };
+}
+
 fn main() {
     if let Err(e) = run(Cli::parse()) {
+        // A closed pipe (`radarnav presets | head`) is the reader's choice, not an error.
+        let broken_pipe = e
+            .chain()
+            .filter_map(|c| c.downcast_ref::<std::io::Error>())
+            .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe);
+        if broken_pipe {
+            return;
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -98,17 +117,25 @@ fn run(cli: Cli) -> Result<()> {
         Command::Scenarios => {
             for (name, _) in BUILTIN_SCENARIOS {
                 let s = Scenario::builtin(name).context("built-in scenario")?;
-                println!("{name:<14} {:>4} objects  {}", s.world.objects().len(), s.description);
+                say!(
+                    "{name:<14} {:>4} objects  {}",
+                    s.world.objects().len(),
+                    s.description
+                );
             }
             Ok(())
         }
         Command::Presets => {
             for p in PRESETS {
-                println!("{:<18} {}", p.name, p.about);
+                say!("{:<18} {}", p.name, p.about);
             }
             Ok(())
         }
-        Command::Render { scenario, out, pixels } => {
+        Command::Render {
+            scenario,
+            out,
+            pixels,
+        } => {
             let s = load(&scenario)?;
             let mut fig = Figure::of_world(&s.world, None, pixels)?;
             for r in &s.robots {
@@ -117,13 +144,30 @@ fn run(cli: Cli) -> Result<()> {
             }
             let path = out.join(format!("{}.png", s.name));
             create_dir(&out)?;
-            save_png(&fig.finish(&format!("{} - {}", s.name, s.description)), &path)?;
-            println!("wrote {}", path.display());
+            save_png(
+                &fig.finish(&format!("{} - {}", s.name, s.description)),
+                &path,
+            )?;
+            say!("wrote {}", path.display());
             Ok(())
         }
-        Command::Scan { scenario, sensor, robot, pose, seed, out, pixels } => {
-            scan(&scenario, &sensor, robot.as_deref(), pose.as_deref(), seed, &out, pixels)
-        }
+        Command::Scan {
+            scenario,
+            sensor,
+            robot,
+            pose,
+            seed,
+            out,
+            pixels,
+        } => scan(
+            &scenario,
+            &sensor,
+            robot.as_deref(),
+            pose.as_deref(),
+            seed,
+            &out,
+            pixels,
+        ),
         Command::Bench { scenario, scans } => bench(&scenario, scans),
     }
 }
@@ -132,13 +176,19 @@ fn run(cli: Cli) -> Result<()> {
 fn load(arg: &str) -> Result<Scenario> {
     let path = Path::new(arg);
     if path.exists() || arg.ends_with(".toml") {
-        let src = fs::read_to_string(path).with_context(|| format!("reading scenario file {arg}"))?;
-        let name = path.file_stem().map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned());
+        let src =
+            fs::read_to_string(path).with_context(|| format!("reading scenario file {arg}"))?;
+        let name = path
+            .file_stem()
+            .map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned());
         return Ok(Scenario::from_toml(&src, arg, &name)?);
     }
     Scenario::builtin(arg).with_context(|| {
         let names: Vec<&str> = BUILTIN_SCENARIOS.iter().map(|(n, _)| *n).collect();
-        format!("`{arg}` is neither a file nor a built-in scenario ({})", names.join(", "))
+        format!(
+            "`{arg}` is neither a file nor a built-in scenario ({})",
+            names.join(", ")
+        )
     })
 }
 
@@ -153,7 +203,9 @@ fn parse_pose(s: &str) -> Result<Pose> {
         .collect::<Result<_, _>>()
         .with_context(|| format!("--pose `{s}`: expected x,y,yaw_deg"))?;
     match v.as_slice() {
-        [x, y, yaw] if v.iter().all(|a| a.is_finite()) => Ok(Pose::new(*x, *y, 0.0, yaw.to_radians())),
+        [x, y, yaw] if v.iter().all(|a| a.is_finite()) => {
+            Ok(Pose::new(*x, *y, 0.0, yaw.to_radians()))
+        }
         _ => bail!("--pose `{s}`: expected three finite numbers x,y,yaw_deg"),
     }
 }
@@ -163,12 +215,21 @@ fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
     let seed = seed.unwrap_or(s.sim.seed);
     let results = thesis_experiment(&s, seed, repeats)?;
     create_dir(out)?;
-    println!("foliage-wall, robot at its start pose, seed {seed}: share of rays that see past the foliage wall");
-    println!("{:<18} {:<18} {:>6} {:>12} {:>16}", "figure", "preset", "rays", "this scan", format!("mean of {}", repeats + 1));
+    say!(
+        "foliage-wall, robot at its start pose, seed {seed}: share of rays that see past the foliage wall"
+    );
+    say!(
+        "{:<18} {:<18} {:>6} {:>12} {:>16}",
+        "figure",
+        "preset",
+        "rays",
+        "this scan",
+        format!("mean of {}", repeats + 1)
+    );
     for r in &results {
         let path = out.join(format!("{}.png", r.file));
         save_png(&result_figure(&s, r, 900)?, &path)?;
-        println!(
+        say!(
             "{:<18} {:<18} {:>6} {:>11.1}% {:>15.2}%",
             r.file,
             r.preset,
@@ -177,7 +238,7 @@ fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
             100.0 * r.mean_share_past
         );
     }
-    println!("figures written to {}", out.display());
+    say!("figures written to {}", out.display());
     Ok(())
 }
 
@@ -206,22 +267,43 @@ fn scan(
                     on_robot.join(", ")
                 )
             })?;
-            let mount = r.sensors.first().map_or(Pose::new(0.0, 0.0, 0.4, 0.0), |m| m.mount);
-            MountedSensor { name: sensor.to_owned(), config, mount }
+            let mount = r
+                .sensors
+                .first()
+                .map_or(Pose::new(0.0, 0.0, 0.4, 0.0), |m| m.mount);
+            MountedSensor {
+                name: sensor.to_owned(),
+                config,
+                mount,
+            }
         }
     };
     let robot_pose = pose.map(parse_pose).transpose()?.unwrap_or(r.start);
     let sensor_pose = robot_pose.compose(&mounted.mount);
     let mut rng = ChaCha8Rng::seed_from_u64(seed.unwrap_or(s.sim.seed));
-    let scan = mounted.config.scan(&s.world, &sensor_pose, 0.0, &mut rng, &mut Tracer::default());
+    let scan = mounted.config.scan(
+        &s.world,
+        &sensor_pose,
+        0.0,
+        &mut rng,
+        &mut Tracer::default(),
+    );
 
     create_dir(out)?;
     let mut fig = Figure::of_world(&s.world, None, pixels)?;
     fig.draw_scan(&scan);
     let (l, w) = vehicle_footprint(&r.vehicle);
     fig.draw_robot(&robot_pose, l, w);
-    save_png(&fig.finish(&format!("{} - {}", s.name, mounted.name)), &out.join("scan.png"))?;
-    let materials: Vec<&str> = s.world.materials().iter().map(|(_, m)| m.name.as_str()).collect();
+    save_png(
+        &fig.finish(&format!("{} - {}", s.name, mounted.name)),
+        &out.join("scan.png"),
+    )?;
+    let materials: Vec<&str> = s
+        .world
+        .materials()
+        .iter()
+        .map(|(_, m)| m.name.as_str())
+        .collect();
     let json = serde_json::json!({
         "scenario": s.name,
         "robot": r.name,
@@ -230,11 +312,12 @@ fn scan(
         "materials": materials,
         "scan": scan,
     });
-    fs::write(out.join("scan.json"), serde_json::to_vec_pretty(&json)?).context("writing scan.json")?;
+    fs::write(out.join("scan.json"), serde_json::to_vec_pretty(&json)?)
+        .context("writing scan.json")?;
     write_csv(&out.join("scan.csv"), &scan, &materials)?;
     let share = share_past_foliage(&s.world, &scan);
     let returns = scan.ranges.iter().filter(|r| r.is_finite()).count();
-    println!(
+    say!(
         "{} rays, {} returns, {:.1}% see past foliage; wrote scan.png, scan.json, scan.csv to {}",
         scan.len(),
         returns,
@@ -245,8 +328,13 @@ fn scan(
 }
 
 fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
-    let mut w = std::io::BufWriter::new(fs::File::create(path).with_context(|| format!("creating {}", path.display()))?);
-    writeln!(w, "index,azimuth_deg,elevation_deg,range_m,hit,material,beam")?;
+    let mut w = std::io::BufWriter::new(
+        fs::File::create(path).with_context(|| format!("creating {}", path.display()))?,
+    );
+    writeln!(
+        w,
+        "index,azimuth_deg,elevation_deg,range_m,hit,material,beam"
+    )?;
     for i in 0..scan.len() {
         let (az, el) = scan.angles(i);
         let material = scan.materials[i].map_or("", |m| materials[m.0 as usize]);
@@ -260,24 +348,39 @@ fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
             scan.beams[i].as_str()
         )?;
     }
-    w.flush().with_context(|| format!("writing {}", path.display()))
+    w.flush()
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 fn bench(scenario: &str, scans: usize) -> Result<()> {
     let s = load(scenario)?;
-    let r = s.robot(None).with_context(|| format!("scenario `{}` has no robot", s.name))?;
+    let r = s
+        .robot(None)
+        .with_context(|| format!("scenario `{}` has no robot", s.name))?;
     let mut tracer = Tracer::default();
     let mut rng = ChaCha8Rng::seed_from_u64(s.sim.seed);
-    println!("{} ({} objects), {} scans per sensor, one thread:", s.name, s.world.objects().len(), scans);
+    say!(
+        "{} ({} objects), {} scans per sensor, one thread:",
+        s.name,
+        s.world.objects().len(),
+        scans
+    );
     for m in &r.sensors {
         let pose = r.start.compose(&m.mount);
         let t0 = Instant::now();
         let mut rays = 0usize;
         for k in 0..scans.max(1) {
-            rays += m.config.scan(&s.world, &pose, k as f64, &mut rng, &mut tracer).len();
+            rays += m
+                .config
+                .scan(&s.world, &pose, k as f64, &mut rng, &mut tracer)
+                .len();
         }
         let secs = t0.elapsed().as_secs_f64();
-        println!("  {:<10} {:>8.0} rays/s  ({rays} rays in {secs:.3} s)", m.name, rays as f64 / secs);
+        say!(
+            "  {:<10} {:>8.0} rays/s  ({rays} rays in {secs:.3} s)",
+            m.name,
+            rays as f64 / secs
+        );
     }
     Ok(())
 }

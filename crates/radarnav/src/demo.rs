@@ -83,15 +83,23 @@ pub fn share_past_foliage(world: &World, scan: &Scan) -> f64 {
         return 0.0;
     }
     let mut q = RayQuery::default();
-    let n = (0..scan.len()).filter(|&i| sees_past_foliage(world, scan, i, &mut q)).count();
+    let n = (0..scan.len())
+        .filter(|&i| sees_past_foliage(world, scan, i, &mut q))
+        .count();
     n as f64 / scan.len() as f64
 }
 
 /// Runs the experiment: for the first robot of `scenario`, the laser named `laser` and the radar
 /// presets `radar_thesis`, `radar_thesis_n50`, `radar_thesis_n100` at the mount of the sensor
 /// named `radar`, plus `ground_truth`. `repeats` extra scans per sensor give the mean share.
-pub fn thesis_experiment(scenario: &Scenario, seed: u64, repeats: usize) -> Result<Vec<SensorResult>, DemoError> {
-    let robot = scenario.robot(None).ok_or_else(|| DemoError::NoRobot(scenario.name.clone()))?;
+pub fn thesis_experiment(
+    scenario: &Scenario,
+    seed: u64,
+    repeats: usize,
+) -> Result<Vec<SensorResult>, DemoError> {
+    let robot = scenario
+        .robot(None)
+        .ok_or_else(|| DemoError::NoRobot(scenario.name.clone()))?;
     let sensor = |name: &str| {
         robot.sensor(name).ok_or_else(|| DemoError::NoSensor {
             robot: robot.name.clone(),
@@ -101,11 +109,36 @@ pub fn thesis_experiment(scenario: &Scenario, seed: u64, repeats: usize) -> Resu
     let (laser, radar) = (sensor("laser")?, sensor("radar")?);
     let with_preset = |name: &str| preset(name).expect("built-in preset");
     let runs: [(&str, &str, SensorConfig, _); 5] = [
-        ("fig7_laser", "Fig. 7: laser", laser.config.clone(), laser.mount),
-        ("fig8_radar", "Fig. 8: radar, no side beams", with_preset("radar_thesis"), radar.mount),
-        ("fig9_radar_n50", "Fig. 9: radar, side beams N=50 (0.2 m)", with_preset("radar_thesis_n50"), radar.mount),
-        ("fig10_radar_n100", "Fig. 10: radar, side beams N=100 (0.4 m)", with_preset("radar_thesis_n100"), radar.mount),
-        ("ground_truth", "Ground truth: first surface", with_preset("ground_truth"), radar.mount),
+        (
+            "fig7_laser",
+            "Fig. 7: laser",
+            laser.config.clone(),
+            laser.mount,
+        ),
+        (
+            "fig8_radar",
+            "Fig. 8: radar, no side beams",
+            with_preset("radar_thesis"),
+            radar.mount,
+        ),
+        (
+            "fig9_radar_n50",
+            "Fig. 9: radar, side beams N=50 (0.2 m)",
+            with_preset("radar_thesis_n50"),
+            radar.mount,
+        ),
+        (
+            "fig10_radar_n100",
+            "Fig. 10: radar, side beams N=100 (0.4 m)",
+            with_preset("radar_thesis_n100"),
+            radar.mount,
+        ),
+        (
+            "ground_truth",
+            "Ground truth: first surface",
+            with_preset("ground_truth"),
+            radar.mount,
+        ),
     ];
     let mut tracer = Tracer::default();
     let mut out = Vec::new();
@@ -133,7 +166,11 @@ pub fn thesis_experiment(scenario: &Scenario, seed: u64, repeats: usize) -> Resu
 }
 
 /// The figure of one result: the world, the scan, the robot at its start.
-pub fn result_figure(scenario: &Scenario, result: &SensorResult, pixels: u32) -> Result<Pixmap, DemoError> {
+pub fn result_figure(
+    scenario: &Scenario,
+    result: &SensorResult,
+    pixels: u32,
+) -> Result<Pixmap, DemoError> {
     let mut fig = Figure::of_world(&scenario.world, None, pixels)?;
     fig.draw_scan(&result.scan);
     if let Some(robot) = scenario.robot(None) {
@@ -197,7 +234,10 @@ mod tests {
                 }
             }
         }
-        assert!(radar_behind > 100, "radar returns behind the wall: {radar_behind}");
+        assert!(
+            radar_behind > 100,
+            "radar returns behind the wall: {radar_behind}"
+        );
     }
 
     #[test]
@@ -209,7 +249,13 @@ mod tests {
         // Straight at the core sphere centred at (7, 4): entry at x = 6.2 (0.8 m slice radius
         // at 0.4 m height), then 3 dB / 3 dB/m = 1 m in.
         let start = Pose::new(3.0, 4.0, 0.4, 0.0).position();
-        let r = Tracer::default().trace(&s.world, &Ray::new(start, glam::DVec3::X), Band::Radar, 3.0, 20.0);
+        let r = Tracer::default().trace(
+            &s.world,
+            &Ray::new(start, glam::DVec3::X),
+            Band::Radar,
+            3.0,
+            20.0,
+        );
         assert_eq!(r.kind, HitKind::Exhausted);
         assert!((r.range - 4.2).abs() < 1e-9, "{r:?}");
     }
@@ -223,6 +269,9 @@ mod tests {
             assert_eq!(x.scan, y.scan);
         }
         let c = thesis_experiment(&s, 10, 0).unwrap();
-        assert_ne!(a[2].scan.beams, c[2].scan.beams, "a new seed draws new side beams");
+        assert_ne!(
+            a[2].scan.beams, c[2].scan.beams,
+            "a new seed draws new side beams"
+        );
     }
 }

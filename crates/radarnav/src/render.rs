@@ -109,7 +109,13 @@ impl Figure {
 
     fn draw_grid(&mut self) {
         let span = (self.max - self.min).max_element();
-        let step = if span > 40.0 { 10.0 } else if span > 15.0 { 5.0 } else { 1.0 };
+        let step = if span > 40.0 {
+            10.0
+        } else if span > 15.0 {
+            5.0
+        } else {
+            1.0
+        };
         let stroke = Stroke {
             width: 1.0,
             ..Stroke::default()
@@ -118,20 +124,27 @@ impl Figure {
         let mut pb = PathBuilder::new();
         let mut x = (self.min.x / step).ceil() * step;
         while x <= self.max.x {
-            let (a, b) = (self.px(DVec2::new(x, self.min.y)), self.px(DVec2::new(x, self.max.y)));
+            let (a, b) = (
+                self.px(DVec2::new(x, self.min.y)),
+                self.px(DVec2::new(x, self.max.y)),
+            );
             pb.move_to(a.0, a.1);
             pb.line_to(b.0, b.1);
             x += step;
         }
         let mut y = (self.min.y / step).ceil() * step;
         while y <= self.max.y {
-            let (a, b) = (self.px(DVec2::new(self.min.x, y)), self.px(DVec2::new(self.max.x, y)));
+            let (a, b) = (
+                self.px(DVec2::new(self.min.x, y)),
+                self.px(DVec2::new(self.max.x, y)),
+            );
             pb.move_to(a.0, a.1);
             pb.line_to(b.0, b.1);
             y += step;
         }
         if let Some(path) = pb.finish() {
-            self.pixmap.stroke_path(&path, &grid, &stroke, Transform::identity(), None);
+            self.pixmap
+                .stroke_path(&path, &grid, &stroke, Transform::identity(), None);
         }
     }
 
@@ -147,13 +160,15 @@ impl Figure {
         }
         pb.close();
         if let Some(path) = pb.finish() {
-            self.pixmap.fill_path(&path, fill, FillRule::EvenOdd, Transform::identity(), None);
+            self.pixmap
+                .fill_path(&path, fill, FillRule::EvenOdd, Transform::identity(), None);
             if let Some(o) = outline {
                 let stroke = Stroke {
                     width: 1.0,
                     ..Stroke::default()
                 };
-                self.pixmap.stroke_path(&path, o, &stroke, Transform::identity(), None);
+                self.pixmap
+                    .stroke_path(&path, o, &stroke, Transform::identity(), None);
             }
         }
     }
@@ -199,14 +214,24 @@ impl Figure {
                 HitKind::None => (NONE_RGB, 40, ray.at(scan.range_max)),
             };
             // A noisy reading past range_max is reported +inf though the ray hit something.
-            let end = if r.is_finite() { end } else { ray.at(scan.range_max) };
+            let end = if r.is_finite() {
+                end
+            } else {
+                ray.at(scan.range_max)
+            };
             kinds[scan.hits[i] as usize] = true;
             let (a, b) = (self.px(ray.origin.truncate()), self.px(end.truncate()));
             let mut pb = PathBuilder::new();
             pb.move_to(a.0, a.1);
             pb.line_to(b.0, b.1);
             if let Some(path) = pb.finish() {
-                self.pixmap.stroke_path(&path, &paint(rgb, alpha), &stroke, Transform::identity(), None);
+                self.pixmap.stroke_path(
+                    &path,
+                    &paint(rgb, alpha),
+                    &stroke,
+                    Transform::identity(),
+                    None,
+                );
             }
             if r.is_finite() {
                 self.dot(end, 2.0, rgb);
@@ -227,7 +252,13 @@ impl Figure {
     fn dot(&mut self, p: DVec3, radius: f32, rgb: [u8; 3]) {
         let (x, y) = self.px(p.truncate());
         if let Some(path) = PathBuilder::from_circle(x, y, radius) {
-            self.pixmap.fill_path(&path, &paint(rgb, 255), FillRule::Winding, Transform::identity(), None);
+            self.pixmap.fill_path(
+                &path,
+                &paint(rgb, 255),
+                FillRule::Winding,
+                Transform::identity(),
+                None,
+            );
         }
     }
 
@@ -238,8 +269,16 @@ impl Figure {
         let m = DVec2::new(pose.x, pose.y);
         let (hl, hw) = (fwd * length / 2.0, left * width / 2.0);
         let body = [m - hl - hw, m + hl - hw, m + hl + hw, m - hl + hw];
-        self.polygon(&body, &paint([30, 60, 200], 220), Some(&paint([10, 20, 90], 255)));
-        let nose = [m + hl * 1.6, m + hl * 0.6 + hw * 0.6, m + hl * 0.6 - hw * 0.6];
+        self.polygon(
+            &body,
+            &paint([30, 60, 200], 220),
+            Some(&paint([10, 20, 90], 255)),
+        );
+        let nose = [
+            m + hl * 1.6,
+            m + hl * 0.6 + hw * 0.6,
+            m + hl * 0.6 - hw * 0.6,
+        ];
         self.polygon(&nose, &paint([255, 255, 255], 255), None);
         if !self.legend.iter().any(|(_, l)| l == "robot") {
             self.legend.push(([30, 60, 200], "robot".to_owned()));
@@ -254,7 +293,8 @@ impl Figure {
         for (k, (rgb, label)) in legend.iter().enumerate() {
             let y = TITLE_H as i32 + 6 + 20 * k as i32;
             if let Some(r) = Rect::from_xywh(x0 as f32, y as f32, 14.0, 14.0) {
-                self.pixmap.fill_rect(r, &paint(*rgb, 255), Transform::identity(), None);
+                self.pixmap
+                    .fill_rect(r, &paint(*rgb, 255), Transform::identity(), None);
             }
             self.text(x0 + 20, y + 3, label, [30, 30, 30], 1);
         }
@@ -281,9 +321,14 @@ impl Figure {
         .into_iter()
         .flatten()
         {
-            self.pixmap.fill_rect(r, &black, Transform::identity(), None);
+            self.pixmap
+                .fill_rect(r, &black, Transform::identity(), None);
         }
-        let label = if len < 1.0 { format!("{len} m") } else { format!("{len:.0} m") };
+        let label = if len < 1.0 {
+            format!("{len} m")
+        } else {
+            format!("{len:.0} m")
+        };
         self.text(x1 as i32 + 8, y as i32 - 4, &label, [0, 0, 0], 1);
     }
 
@@ -301,7 +346,9 @@ impl Figure {
                     if bits & (1 << col) != 0 {
                         let px = x + (k as i32 * 8 + col) * scale;
                         let py = y + row as i32 * scale;
-                        if let Some(r) = Rect::from_xywh(px as f32, py as f32, scale as f32, scale as f32) {
+                        if let Some(r) =
+                            Rect::from_xywh(px as f32, py as f32, scale as f32, scale as f32)
+                        {
                             self.pixmap.fill_rect(r, &p, Transform::identity(), None);
                         }
                     }
@@ -365,9 +412,15 @@ mod tests {
         let fig = Figure::of_world(&s.world, None, 600).unwrap();
         let (x, y) = fig.px(DVec2::new(7.0, 0.3));
         let c = rgb_at(&a, x as u32, y as u32);
-        assert!(c[1] > c[0] && c[1] > c[2], "foliage should look green, got {c:?}");
+        assert!(
+            c[1] > c[0] && c[1] > c[2],
+            "foliage should look green, got {c:?}"
+        );
         let (x, y) = fig.px(DVec2::new(2.9, 4.1));
         let c = rgb_at(&a, x as u32, y as u32);
-        assert!(c[2] > 150 && c[0] < 100, "robot should look blue, got {c:?}");
+        assert!(
+            c[2] > 150 && c[0] < 100,
+            "robot should look blue, got {c:?}"
+        );
     }
 }

@@ -2,12 +2,24 @@
 
 /// (name, TOML source) of every built-in scenario.
 pub const BUILTIN_SCENARIOS: &[(&str, &str)] = &[
-    ("foliage-wall", include_str!("../../../../scenarios/foliage-wall.toml")),
-    ("smoke-room", include_str!("../../../../scenarios/smoke-room.toml")),
-    ("open-field", include_str!("../../../../scenarios/open-field.toml")),
+    (
+        "foliage-wall",
+        include_str!("../../../../scenarios/foliage-wall.toml"),
+    ),
+    (
+        "smoke-room",
+        include_str!("../../../../scenarios/smoke-room.toml"),
+    ),
+    (
+        "open-field",
+        include_str!("../../../../scenarios/open-field.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name`.
 pub fn builtin_source(name: &str) -> Option<&'static str> {
-    BUILTIN_SCENARIOS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+    BUILTIN_SCENARIOS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, s)| *s)
 }

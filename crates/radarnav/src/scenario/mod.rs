@@ -115,7 +115,10 @@ pub const VEHICLES: &[(&str, f64, f64)] = &[("p3at", 0.508, 0.497)];
 
 /// Footprint (length, width) of a vehicle preset; the P3AT's for an unknown name.
 pub fn vehicle_footprint(name: &str) -> (f64, f64) {
-    let v = VEHICLES.iter().find(|v| v.0 == name).unwrap_or(&VEHICLES[0]);
+    let v = VEHICLES
+        .iter()
+        .find(|v| v.0 == name)
+        .unwrap_or(&VEHICLES[0]);
     (v.1, v.2)
 }
 
@@ -125,7 +128,12 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    fn err(&self, span: Range<usize>, key: Option<&str>, message: impl Into<String>) -> ScenarioError {
+    fn err(
+        &self,
+        span: Range<usize>,
+        key: Option<&str>,
+        message: impl Into<String>,
+    ) -> ScenarioError {
         let start = span.start.min(self.src.len());
         let before = &self.src[..start];
         let line = before.matches('\n').count() + 1;
@@ -152,7 +160,10 @@ fn key_at(src: &str, span: &Range<usize>) -> Option<String> {
         }
     }
     let line_start = src[..span.start].rfind('\n').map_or(0, |i| i + 1);
-    let head = src[line_start..span.start].trim_end().strip_suffix('=')?.trim_end();
+    let head = src[line_start..span.start]
+        .trim_end()
+        .strip_suffix('=')?
+        .trim_end();
     let key: String = head.chars().rev().take_while(|&c| is_key(c)).collect();
     (!key.is_empty()).then(|| key.chars().rev().collect())
 }
@@ -162,7 +173,11 @@ impl Scenario {
     pub fn from_toml(src: &str, file: &str, name: &str) -> Result<Scenario, ScenarioError> {
         let ctx = Ctx { src, file };
         let spec: ScenarioSpec = toml::from_str(src).map_err(|e| {
-            ctx.err(e.span().unwrap_or(0..0), None, e.message().trim_end().to_owned())
+            ctx.err(
+                e.span().unwrap_or(0..0),
+                None,
+                e.message().trim_end().to_owned(),
+            )
         })?;
         let materials = build_materials(&ctx, &spec)?;
         let objects = spec
@@ -174,7 +189,11 @@ impl Scenario {
         for r in &spec.robots {
             let robot = build_robot(&ctx, r)?;
             if robots.iter().any(|x| x.name == robot.name) {
-                return Err(ctx.err(r.span(), Some("name"), format!("robot name `{}` is used twice", robot.name)));
+                return Err(ctx.err(
+                    r.span(),
+                    Some("name"),
+                    format!("robot name `{}` is used twice", robot.name),
+                ));
             }
             robots.push(robot);
         }
@@ -217,13 +236,21 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
         let span = m.span();
         let m = m.get_ref();
         if seen.contains(&m.name.as_str()) {
-            return Err(ctx.err(span, Some("name"), format!("material `{}` is defined twice", m.name)));
+            return Err(ctx.err(
+                span,
+                Some("name"),
+                format!("material `{}` is defined twice", m.name),
+            ));
         }
         seen.push(&m.name);
         let base = match &m.base {
             Some(b) => {
                 let id = table.id(b.get_ref()).ok_or_else(|| {
-                    ctx.err(b.span(), Some("base"), unknown_material(b.get_ref(), &table))
+                    ctx.err(
+                        b.span(),
+                        Some("base"),
+                        unknown_material(b.get_ref(), &table),
+                    )
                 })?;
                 Some(table.get(id).clone())
             }
@@ -237,11 +264,21 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                 ctx.err(span.clone(), None, "missing field `radar_attenuation_db_per_m` (or a `base` material to take it from)")
             })?;
         let color = match &m.color {
-            Some(c) => parse_color(c.get_ref())
-                .ok_or_else(|| ctx.err(c.span(), Some("color"), format!("expected \"#rrggbb\", found \"{}\"", c.get_ref())))?,
-            None => base.as_ref().map_or_else(|| hashed_color(&m.name), |b| b.color),
+            Some(c) => parse_color(c.get_ref()).ok_or_else(|| {
+                ctx.err(
+                    c.span(),
+                    Some("color"),
+                    format!("expected \"#rrggbb\", found \"{}\"", c.get_ref()),
+                )
+            })?,
+            None => base
+                .as_ref()
+                .map_or_else(|| hashed_color(&m.name), |b| b.color),
         };
-        let laser_opaque = m.laser_opaque.or(base.as_ref().map(|b| b.laser_opaque)).unwrap_or(true);
+        let laser_opaque = m
+            .laser_opaque
+            .or(base.as_ref().map(|b| b.laser_opaque))
+            .unwrap_or(true);
         let material = Material {
             name: m.name.clone(),
             radar_attenuation_db_per_m: radar,
@@ -250,14 +287,20 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                 .map(|v| v.0)
                 .or(base.as_ref().map(|b| b.radar_reflectivity))
                 .unwrap_or(0.5),
-            specular: m.specular.or(base.as_ref().map(|b| b.specular)).unwrap_or(false),
+            specular: m
+                .specular
+                .or(base.as_ref().map(|b| b.specular))
+                .unwrap_or(false),
             laser_opaque,
             laser_attenuation_db_per_m: m
                 .laser_attenuation_db_per_m
                 .map(|v| v.0)
                 .or(base.as_ref().map(|b| b.laser_attenuation_db_per_m))
                 .unwrap_or(if laser_opaque { f64::INFINITY } else { 0.0 }),
-            traversable: m.traversable.or(base.as_ref().map(|b| b.traversable)).unwrap_or(false),
+            traversable: m
+                .traversable
+                .or(base.as_ref().map(|b| b.traversable))
+                .unwrap_or(false),
             color,
         };
         table
@@ -268,7 +311,10 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
 }
 
 fn unknown_material(name: &str, table: &MaterialTable) -> String {
-    format!("unknown material `{name}`; known: {}", table.names().join(", "))
+    format!(
+        "unknown material `{name}`; known: {}",
+        table.names().join(", ")
+    )
 }
 
 fn parse_color(s: &str) -> Option<[u8; 3]> {
@@ -282,10 +328,14 @@ fn parse_color(s: &str) -> Option<[u8; 3]> {
 
 /// A stable colour for a user material without one (FNV-1a of the name).
 fn hashed_color(name: &str) -> [u8; 3] {
-    let h = name
-        .bytes()
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3));
-    [64 + (h & 0x7f) as u8, 64 + ((h >> 8) & 0x7f) as u8, 64 + ((h >> 16) & 0x7f) as u8]
+    let h = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    [
+        64 + (h & 0x7f) as u8,
+        64 + ((h >> 8) & 0x7f) as u8,
+        64 + ((h >> 16) & 0x7f) as u8,
+    ]
 }
 
 fn center(c: &Center, rest_height: f64) -> DVec3 {
@@ -296,11 +346,19 @@ fn xy(points: &[Xy]) -> Vec<DVec2> {
     points.iter().map(|p| DVec2::new(p[0].0, p[1].0)).collect()
 }
 
-fn build_object(ctx: &Ctx, materials: &MaterialTable, o: &Spanned<ObjectSpec>) -> Result<Object, ScenarioError> {
+fn build_object(
+    ctx: &Ctx,
+    materials: &MaterialTable,
+    o: &Spanned<ObjectSpec>,
+) -> Result<Object, ScenarioError> {
     let span = o.span();
     let spec = o.get_ref();
     let material = materials.id(spec.material.get_ref()).ok_or_else(|| {
-        ctx.err(spec.material.span(), Some("material"), unknown_material(spec.material.get_ref(), materials))
+        ctx.err(
+            spec.material.span(),
+            Some("material"),
+            unknown_material(spec.material.get_ref(), materials),
+        )
     })?;
     let given = [
         spec.sphere.is_some(),
@@ -320,18 +378,37 @@ fn build_object(ctx: &Ctx, materials: &MaterialTable, o: &Spanned<ObjectSpec>) -
         ));
     }
     let (shape, shape_span) = if let Some(s) = &spec.sphere {
-        (Shape::sphere(center(&s.center, s.radius.0), s.radius.0), span.clone())
+        (
+            Shape::sphere(center(&s.center, s.radius.0), s.radius.0),
+            span.clone(),
+        )
     } else if let Some(b) = &spec.cuboid {
         let size = DVec3::new(b.size[0].0, b.size[1].0, b.size[2].0);
-        (Shape::cuboid(center(&b.center, size.z / 2.0), size, b.yaw_deg.0.to_radians()), span.clone())
+        (
+            Shape::cuboid(
+                center(&b.center, size.z / 2.0),
+                size,
+                b.yaw_deg.0.to_radians(),
+            ),
+            span.clone(),
+        )
     } else if let Some(c) = &spec.cylinder {
-        (Shape::cylinder(center(&c.center, c.height.0 / 2.0), c.radius.0, c.height.0), span.clone())
+        (
+            Shape::cylinder(center(&c.center, c.height.0 / 2.0), c.radius.0, c.height.0),
+            span.clone(),
+        )
     } else if let Some(w) = &spec.wall {
         let ws = w.get_ref();
-        (Shape::wall(xy(&ws.points), ws.thickness.0, ws.height.0), w.span())
+        (
+            Shape::wall(xy(&ws.points), ws.thickness.0, ws.height.0),
+            w.span(),
+        )
     } else if let Some(p) = &spec.prism {
         let ps = p.get_ref();
-        (Shape::prism(xy(&ps.polygon), ps.z_min.0, ps.z_max.0), p.span())
+        (
+            Shape::prism(xy(&ps.polygon), ps.z_min.0, ps.z_max.0),
+            p.span(),
+        )
     } else {
         unreachable!("exactly one shape was checked above")
     };
@@ -350,21 +427,37 @@ fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, Scenari
         return Err(ctx.err(
             spec.vehicle.span(),
             Some("vehicle"),
-            format!("unknown vehicle `{}`; known: {}", spec.vehicle.get_ref(), known.join(", ")),
+            format!(
+                "unknown vehicle `{}`; known: {}",
+                spec.vehicle.get_ref(),
+                known.join(", ")
+            ),
         ));
     }
     let mut sensors: Vec<MountedSensor> = Vec::new();
     for s in &spec.sensors {
         let sensor = build_sensor(ctx, s)?;
         if sensors.iter().any(|x| x.name == sensor.name) {
-            return Err(ctx.err(s.span(), Some("name"), format!("sensor name `{}` is used twice on robot `{}`", sensor.name, spec.name)));
+            return Err(ctx.err(
+                s.span(),
+                Some("name"),
+                format!(
+                    "sensor name `{}` is used twice on robot `{}`",
+                    sensor.name, spec.name
+                ),
+            ));
         }
         sensors.push(sensor);
     }
     Ok(Robot {
         name: spec.name.clone(),
         vehicle: spec.vehicle.get_ref().clone(),
-        start: Pose::new(spec.start.x.0, spec.start.y.0, 0.0, spec.start.yaw_deg.0.to_radians()),
+        start: Pose::new(
+            spec.start.x.0,
+            spec.start.y.0,
+            0.0,
+            spec.start.yaw_deg.0.to_radians(),
+        ),
         sensors,
     })
 }
@@ -376,7 +469,11 @@ fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, Sce
         ctx.err(
             spec.preset.span(),
             Some("preset"),
-            format!("unknown sensor preset `{}`; known: {}", spec.preset.get_ref(), known.join(", ")),
+            format!(
+                "unknown sensor preset `{}`; known: {}",
+                spec.preset.get_ref(),
+                known.join(", ")
+            ),
         )
     })?;
     let set = |field: &mut f64, v: Option<f64>| {
@@ -385,7 +482,10 @@ fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, Sce
         }
     };
     set(&mut c.fov, spec.fov_deg.map(|v| v.0.to_radians()));
-    set(&mut c.resolution, spec.resolution_deg.map(|v| v.0.to_radians()));
+    set(
+        &mut c.resolution,
+        spec.resolution_deg.map(|v| v.0.to_radians()),
+    );
     set(&mut c.range_min, spec.range_min.map(|v| v.0));
     set(&mut c.range_max, spec.range_max.map(|v| v.0));
     set(&mut c.rate_hz, spec.rate_hz.map(|v| v.0));
@@ -398,7 +498,11 @@ fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, Sce
     }
     c.validate().map_err(|msg| {
         let key = msg.split_whitespace().next().map(str::to_owned);
-        ctx.err(s.span(), key.as_deref(), format!("sensor `{}`: {msg}", spec.name))
+        ctx.err(
+            s.span(),
+            key.as_deref(),
+            format!("sensor `{}`: {msg}", spec.name),
+        )
     })?;
     let m = &spec.mount;
     Ok(MountedSensor {

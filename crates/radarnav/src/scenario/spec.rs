@@ -1,8 +1,8 @@
 //! The serde shape of a scenario file (DESIGN §2). Values are range-checked while they are
 //! read, so a bad value is reported at its own line and column.
 
-use serde::de::{Deserializer, Error as _};
 use serde::Deserialize;
+use serde::de::{Deserializer, Error as _};
 use toml::Spanned;
 
 macro_rules! checked_f64 {
@@ -49,8 +49,14 @@ impl<'de> Deserialize<'de> for Center {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = Vec::<Finite>::deserialize(d)?;
         match v.as_slice() {
-            [x, y] => Ok(Self { xy: [x.0, y.0], z: None }),
-            [x, y, z] => Ok(Self { xy: [x.0, y.0], z: Some(z.0) }),
+            [x, y] => Ok(Self {
+                xy: [x.0, y.0],
+                z: None,
+            }),
+            [x, y, z] => Ok(Self {
+                xy: [x.0, y.0],
+                z: Some(z.0),
+            }),
             _ => Err(D::Error::custom(format!(
                 "expected [x, y] (resting on the ground) or [x, y, z], found {} numbers",
                 v.len()

@@ -19,7 +19,10 @@ fn builtins_parse_and_have_robots_with_radar_and_laser() {
         let s = Scenario::builtin(name).unwrap();
         assert!(!s.description.is_empty(), "{name}");
         let robot = s.robot(None).unwrap();
-        assert!(robot.sensor("radar").is_some() && robot.sensor("laser").is_some(), "{name}");
+        assert!(
+            robot.sensor("radar").is_some() && robot.sensor("laser").is_some(),
+            "{name}"
+        );
         assert!(!s.world.objects().is_empty());
     }
     assert!(Scenario::builtin("nope").is_none());
@@ -88,15 +91,27 @@ fn out_of_range_value_points_at_the_value() {
     let e = err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0], radius = -1.5 }\n");
     assert_eq!((e.line, e.column), (3, 38), "{e}");
     assert_eq!(e.key.as_deref(), Some("radius"));
-    assert!(e.message.contains("> 0") && e.message.contains("-1.5"), "{e}");
-    assert_eq!(e.to_string(), format!("test.toml:3:38: `radius`: {}", e.message));
+    assert!(
+        e.message.contains("> 0") && e.message.contains("-1.5"),
+        "{e}"
+    );
+    assert_eq!(
+        e.to_string(),
+        format!("test.toml:3:38: `radius`: {}", e.message)
+    );
 }
 
 #[test]
 fn unknown_material_lists_the_known_ones() {
     let e = err("[[object]]\nmaterial = \"granite\"\nsphere = { center = [0, 0], radius = 1 }\n");
-    assert_eq!((e.line, e.column, e.key.as_deref()), (2, 12, Some("material")));
-    assert!(e.message.contains("granite") && e.message.contains("foliage_dense"), "{e}");
+    assert_eq!(
+        (e.line, e.column, e.key.as_deref()),
+        (2, 12, Some("material"))
+    );
+    assert!(
+        e.message.contains("granite") && e.message.contains("foliage_dense"),
+        "{e}"
+    );
     let e = err("[[material]]\nname = \"x\"\nbase = \"granite\"\n");
     assert_eq!((e.line, e.key.as_deref()), (3, Some("base")));
 }
@@ -114,12 +129,17 @@ fn shape_count_must_be_one() {
 
 #[test]
 fn geometric_errors_come_from_the_shape_table() {
-    let e = err("[[object]]\nmaterial = \"wood\"\nwall = { points = [[0, 0], [0, 0]], thickness = 0.1, height = 1 }\n");
+    let e = err(
+        "[[object]]\nmaterial = \"wood\"\nwall = { points = [[0, 0], [0, 0]], thickness = 0.1, height = 1 }\n",
+    );
     assert_eq!(e.line, 3);
     assert!(e.message.contains("equal consecutive points"), "{e}");
-    let e = err("[[object]]\nmaterial = \"wood\"\nprism = { polygon = [[0, 0], [1, 0], [0, 1]], z_min = 1, z_max = 0.5 }\n");
+    let e = err(
+        "[[object]]\nmaterial = \"wood\"\nprism = { polygon = [[0, 0], [1, 0], [0, 1]], z_min = 1, z_max = 0.5 }\n",
+    );
     assert!(e.message.contains("z_max"), "{e}");
-    let e = err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0, 0, 0], radius = 1 }\n");
+    let e =
+        err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0, 0, 0], radius = 1 }\n");
     assert_eq!(e.key.as_deref(), Some("center"));
     assert!(e.message.contains("found 4 numbers"), "{e}");
 }
@@ -136,7 +156,9 @@ fn syntax_and_type_errors() {
 
 #[test]
 fn sensor_errors() {
-    let e = err(&format!("{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"velodyne\"\n"));
+    let e = err(&format!(
+        "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"velodyne\"\n"
+    ));
     assert_eq!((e.line, e.key.as_deref()), (6, Some("preset")));
     assert!(e.message.contains("hokuyo_urg04lx"), "{e}");
     let e = err(&format!(
@@ -149,7 +171,9 @@ fn sensor_errors() {
          [[robot.sensor]]\nname = \"s\"\npreset = \"radar_thesis\"\n"
     ));
     assert!(e.message.contains("used twice"), "{e}");
-    let e = err(&format!("{ROBOT}[[robot]]\nname = \"r\"\nstart = {{ x = 0, y = 0 }}\n"));
+    let e = err(&format!(
+        "{ROBOT}[[robot]]\nname = \"r\"\nstart = {{ x = 0, y = 0 }}\n"
+    ));
     assert!(e.message.contains("robot name `r` is used twice"), "{e}");
     let e = err("[[robot]]\nname = \"r\"\nvehicle = \"tank\"\nstart = { x = 0, y = 0 }\n");
     assert_eq!((e.line, e.key.as_deref()), (3, Some("vehicle")));
@@ -159,7 +183,9 @@ fn sensor_errors() {
 fn bad_colour_and_duplicate_material() {
     let e = err("[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\ncolor = \"red\"\n");
     assert_eq!((e.line, e.key.as_deref()), (4, Some("color")));
-    let e = err("[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\n[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\n");
+    let e = err(
+        "[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\n[[material]]\nname = \"m\"\nradar_attenuation_db_per_m = 1\n",
+    );
     assert!(e.message.contains("defined twice"), "{e}");
     let e = err("[[material]]\nname = \"m\"\n");
     assert!(e.message.contains("radar_attenuation_db_per_m"), "{e}");

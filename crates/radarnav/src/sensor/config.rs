@@ -123,7 +123,13 @@ fn navtech(bin: f64, bins: u32) -> SensorConfig {
     }
 }
 
-fn laser(fov_deg: f64, step_deg: f64, range: (f64, f64), rate_hz: f64, noise: (f64, f64)) -> SensorConfig {
+fn laser(
+    fov_deg: f64,
+    step_deg: f64,
+    range: (f64, f64),
+    rate_hz: f64,
+    noise: (f64, f64),
+) -> SensorConfig {
     SensorConfig {
         preset: None,
         kind: SensorKind::Laser,
@@ -201,6 +207,8 @@ pub const PRESETS: &[Preset] = &[
     Preset {
         name: "usarsim_sick",
         about: "USARSim's SICK model: 3.1416 rad FOV, 0.01745 rad step (181 rays), 20 m",
+        // USARSim's configured figure, slightly more than π: kept as written.
+        #[allow(clippy::approx_constant)]
         make: || SensorConfig {
             fov: 3.1416,
             resolution: 0.01745,
@@ -256,21 +264,52 @@ impl SensorConfig {
     /// Checks cross-field consistency; the message names the offending key.
     pub fn validate(&self) -> Result<(), String> {
         let checks = [
-            (self.fov > 0.0 && self.fov <= std::f64::consts::TAU + 1e-9, "fov_deg", "must be in (0, 360]"),
-            (self.resolution > 0.0 && self.resolution <= self.fov, "resolution_deg", "must be > 0 and at most fov_deg"),
-            (self.range_min >= 0.0 && self.range_min < self.range_max, "range_min", "must be >= 0 and below range_max"),
+            (
+                self.fov > 0.0 && self.fov <= std::f64::consts::TAU + 1e-9,
+                "fov_deg",
+                "must be in (0, 360]",
+            ),
+            (
+                self.resolution > 0.0 && self.resolution <= self.fov,
+                "resolution_deg",
+                "must be > 0 and at most fov_deg",
+            ),
+            (
+                self.range_min >= 0.0 && self.range_min < self.range_max,
+                "range_min",
+                "must be >= 0 and below range_max",
+            ),
             (self.range_max.is_finite(), "range_max", "must be finite"),
-            (self.rate_hz > 0.0 && self.rate_hz.is_finite(), "rate_hz", "must be > 0"),
+            (
+                self.rate_hz > 0.0 && self.rate_hz.is_finite(),
+                "rate_hz",
+                "must be > 0",
+            ),
             (
                 !self.elevations.is_empty()
-                    && self.elevations.iter().all(|e| e.abs() < std::f64::consts::FRAC_PI_2),
+                    && self
+                        .elevations
+                        .iter()
+                        .all(|e| e.abs() < std::f64::consts::FRAC_PI_2),
                 "elevations_deg",
                 "must list at least one angle, each strictly between -90 and 90",
             ),
-            (self.range_noise_std >= 0.0 && self.range_noise_rel >= 0.0, "range_noise_std", "noise must be >= 0"),
+            (
+                self.range_noise_std >= 0.0 && self.range_noise_rel >= 0.0,
+                "range_noise_std",
+                "noise must be >= 0",
+            ),
             (self.penetration_db > 0.0, "penetration_db", "must be > 0"),
-            (self.side_beam_offset >= 0.0 && self.side_beam_offset.is_finite(), "side_beam_offset", "must be >= 0"),
-            (self.range_bin.is_none_or(|b| b > 0.0), "range_bin", "must be > 0"),
+            (
+                self.side_beam_offset >= 0.0 && self.side_beam_offset.is_finite(),
+                "side_beam_offset",
+                "must be >= 0",
+            ),
+            (
+                self.range_bin.is_none_or(|b| b > 0.0),
+                "range_bin",
+                "must be > 0",
+            ),
         ];
         if let Some((_, key, msg)) = checks.iter().find(|c| !c.0) {
             return Err(format!("{key} {msg}"));
@@ -304,7 +343,9 @@ mod tests {
     #[test]
     fn presets_are_valid_and_side_beams_convert_units() {
         for p in PRESETS {
-            p.config().validate().unwrap_or_else(|e| panic!("{}: {e}", p.name));
+            p.config()
+                .validate()
+                .unwrap_or_else(|e| panic!("{}: {e}", p.name));
         }
         assert!((preset("radar_thesis_n50").unwrap().side_beam_offset - 0.2).abs() < 1e-12);
         assert!((preset("radar_thesis_n100").unwrap().side_beam_offset - 0.4).abs() < 1e-12);

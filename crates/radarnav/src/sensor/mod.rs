@@ -106,7 +106,12 @@ impl Scan {
     /// Ray `i` as cast: from its (possibly side-offset) origin, in the world frame.
     pub fn ray(&self, i: usize) -> Ray {
         let (az, el) = self.angles(i);
-        beam_ray(&self.pose, az, el, self.beams[i].side() * self.side_beam_offset)
+        beam_ray(
+            &self.pose,
+            az,
+            el,
+            self.beams[i].side() * self.side_beam_offset,
+        )
     }
 
     /// The world point of a finite reading, `None` for `±inf`.
@@ -157,7 +162,11 @@ impl SensorConfig {
             elevations: self.elevations.clone(),
             range_min: self.range_min,
             range_max: self.range_max,
-            side_beam_offset: if side_beams { self.side_beam_offset } else { 0.0 },
+            side_beam_offset: if side_beams {
+                self.side_beam_offset
+            } else {
+                0.0
+            },
             ranges: Vec::with_capacity(n),
             hits: Vec::with_capacity(n),
             materials: Vec::with_capacity(n),
@@ -169,14 +178,19 @@ impl SensorConfig {
             } else {
                 Beam::Center
             };
-            let noise: f64 = if noisy { rng.sample(StandardNormal) } else { 0.0 };
+            let noise: f64 = if noisy {
+                rng.sample(StandardNormal)
+            } else {
+                0.0
+            };
             let (az, el) = (
                 out.angle_min + (i % azimuths) as f64 * out.angle_increment,
                 out.elevations[i / azimuths],
             );
             let ray = beam_ray(pose, az, el, beam.side() * out.side_beam_offset);
             let ret = tracer.trace(world, &ray, band, self.penetration_db, self.range_max);
-            out.ranges.push(self.reported_range(ret.range, noise) as f32);
+            out.ranges
+                .push(self.reported_range(ret.range, noise) as f32);
             out.hits.push(ret.kind);
             out.materials.push(ret.material);
             out.beams.push(beam);
@@ -241,12 +255,21 @@ mod tests {
         let world = square_room();
         let cfg = preset("ground_truth").unwrap();
         let pose = Pose::new(0.0, 0.0, 0.4, 0.0);
-        let scan = cfg.scan(&world, &pose, 0.0, &mut ChaCha8Rng::seed_from_u64(1), &mut Tracer::default());
+        let scan = cfg.scan(
+            &world,
+            &pose,
+            0.0,
+            &mut ChaCha8Rng::seed_from_u64(1),
+            &mut Tracer::default(),
+        );
         assert_eq!(scan.len(), 360);
         for i in 0..scan.len() {
             let (az, _) = scan.angles(i);
             let expected = 4.9 / az.cos().abs().max(az.sin().abs());
-            assert!((f64::from(scan.ranges[i]) - expected).abs() < 1e-5, "ray {i}");
+            assert!(
+                (f64::from(scan.ranges[i]) - expected).abs() < 1e-5,
+                "ray {i}"
+            );
             assert_eq!(scan.hits[i], HitKind::Solid);
         }
     }
@@ -282,14 +305,32 @@ mod tests {
         let cfg = preset("sick_lms291").unwrap();
         let pose = Pose::new(0.0, 0.0, 0.4, 0.3);
         let mut tr = Tracer::default();
-        let a = cfg.scan(&world, &pose, 0.0, &mut ChaCha8Rng::seed_from_u64(3), &mut tr);
-        let b = cfg.scan(&world, &pose, 0.0, &mut ChaCha8Rng::seed_from_u64(3), &mut tr);
+        let a = cfg.scan(
+            &world,
+            &pose,
+            0.0,
+            &mut ChaCha8Rng::seed_from_u64(3),
+            &mut tr,
+        );
+        let b = cfg.scan(
+            &world,
+            &pose,
+            0.0,
+            &mut ChaCha8Rng::seed_from_u64(3),
+            &mut tr,
+        );
         assert_eq!(a, b);
         let truth = SensorConfig {
             range_noise_std: 0.0,
             ..cfg.clone()
         }
-        .scan(&world, &pose, 0.0, &mut ChaCha8Rng::seed_from_u64(3), &mut tr);
+        .scan(
+            &world,
+            &pose,
+            0.0,
+            &mut ChaCha8Rng::seed_from_u64(3),
+            &mut tr,
+        );
         let errs: Vec<f64> = a
             .ranges
             .iter()

@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::world::{Band, MaterialId, Ray, RayQuery, World};
+use crate::world::{Band, Interval, MaterialId, Ray, RayQuery, World};
 
 /// How a ray ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,60 +63,73 @@ impl Tracer {
         budget_db: f64,
         t_max: f64,
     ) -> Return {
-        let intervals = world.ray_intervals(ray, t_max, &mut self.query);
-        let materials = world.materials();
-        self.active.clear();
-        let mut budget = budget_db;
-        let mut t = 0.0;
-        let mut next = 0;
-        loop {
-            let t_entry = intervals.get(next).map_or(f64::INFINITY, |iv| iv.t_in.max(0.0));
-            let (exit_slot, t_exit) = self
-                .active
-                .iter()
-                .enumerate()
-                .map(|(i, a)| (i, a.0))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .unwrap_or((usize::MAX, f64::INFINITY));
-            let t_next = t_entry.min(t_exit).min(t_max);
-            let alpha: f64 = self.active.iter().map(|a| a.1).sum();
-            if alpha > 0.0 {
-                let cost = alpha * (t_next - t);
-                if cost >= budget {
-                    let densest = self.active.iter().max_by(|a, b| a.1.total_cmp(&b.1));
-                    return Return {
-                        range: t + budget / alpha,
-                        kind: HitKind::Exhausted,
-                        material: densest.map(|a| a.2),
-                    };
-                }
-                budget -= cost;
-            }
-            t = t_next;
-            if t >= t_max {
+        let intervals = world.ray_intervals_to_solid(ray, t_max, band, &mut self.query);
+        walk(intervals, world, band, budget_db, t_max, &mut self.active)
+    }
+}
+
+/// The walk proper over `intervals` (sorted by entry) up to `t_max`.
+fn walk(
+    intervals: &[Interval],
+    world: &World,
+    band: Band,
+    budget_db: f64,
+    t_max: f64,
+    active: &mut Vec<(f64, f64, MaterialId)>,
+) -> Return {
+    let materials = world.materials();
+    active.clear();
+    let mut budget = budget_db;
+    let mut t = 0.0;
+    let mut next = 0;
+    loop {
+        let t_entry = intervals
+            .get(next)
+            .map_or(f64::INFINITY, |iv| iv.t_in.max(0.0));
+        let (exit_slot, t_exit) = active
+            .iter()
+            .enumerate()
+            .map(|(i, a)| (i, a.0))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((usize::MAX, f64::INFINITY));
+        let t_next = t_entry.min(t_exit).min(t_max);
+        let alpha: f64 = active.iter().map(|a| a.1).sum();
+        if alpha > 0.0 {
+            let cost = alpha * (t_next - t);
+            if cost >= budget {
+                let densest = active.iter().max_by(|a, b| a.1.total_cmp(&b.1));
                 return Return {
-                    range: f64::INFINITY,
-                    kind: HitKind::None,
-                    material: None,
+                    range: t + budget / alpha,
+                    kind: HitKind::Exhausted,
+                    material: densest.map(|a| a.2),
                 };
             }
-            if t_entry <= t_exit {
-                let iv = intervals[next];
-                next += 1;
-                let a = materials.get(iv.material).attenuation_db_per_m(band);
-                if a.is_infinite() {
-                    return Return {
-                        range: t,
-                        kind: HitKind::Solid,
-                        material: Some(iv.material),
-                    };
-                }
-                if a > 0.0 {
-                    self.active.push((iv.t_out, a, iv.material));
-                }
-            } else {
-                self.active.swap_remove(exit_slot);
+            budget -= cost;
+        }
+        t = t_next;
+        if t >= t_max {
+            return Return {
+                range: f64::INFINITY,
+                kind: HitKind::None,
+                material: None,
+            };
+        }
+        if t_entry <= t_exit {
+            let iv = intervals[next];
+            next += 1;
+            let a = materials.get(iv.material).attenuation_db_per_m(band);
+            if a.is_infinite() {
+                return Return {
+                    range: t,
+                    kind: HitKind::Solid,
+                    material: Some(iv.material),
+                };
             }
+            if a > 0.0 {
+                active.push((iv.t_out, a, iv.material));
+            }
+        } else {
+            active.swap_remove(exit_slot);
         }
     }
 }
@@ -165,8 +178,7 @@ mod tests {
         let w = world(&[
             (sphere(5.0, 0.0, 1.0), "foliage_dense"),
             (
-                Shape::cuboid(DVec3::new(10.0, 0.0, 1.0), DVec3::new(0.2, 10.0, 2.0), 0.0)
-                    .unwrap(),
+                Shape::cuboid(DVec3::new(10.0, 0.0, 1.0), DVec3::new(0.2, 10.0, 2.0), 0.0).unwrap(),
                 "concrete",
             ),
         ]);
@@ -210,7 +222,10 @@ mod tests {
         ]);
         let mut tr = Tracer::default();
         let r = tr.trace(&w, &x_ray(0.0), Band::Radar, 3.5, 20.0);
-        assert_eq!((r.kind, r.material), (HitKind::Solid, w.materials().id("metal")));
+        assert_eq!(
+            (r.kind, r.material),
+            (HitKind::Solid, w.materials().id("metal"))
+        );
         assert!((r.range - 4.5).abs() < 1e-12);
         let short = tr.trace(&w, &x_ray(0.0), Band::Radar, 2.5, 20.0);
         assert_eq!(short.kind, HitKind::Exhausted);
@@ -228,11 +243,46 @@ mod tests {
         assert!((laser.range - 4.0).abs() < 1e-12);
     }
 
+    proptest::proptest! {
+        /// Pruning behind the nearest solid never changes where a ray ends.
+        #[test]
+        fn pruned_trace_equals_walk_over_all_intervals(
+            spheres in proptest::collection::vec(
+                ((-20.0..20.0f64, -20.0..20.0f64, 0.0..2.0f64), 0.2..3.0f64, 0usize..9), 1..60),
+            rays in proptest::collection::vec(((-1.0..1.0f64, -1.0..1.0f64), -0.2..0.2f64), 1..10),
+            budget in 0.1..12.0f64,
+        ) {
+            let names: Vec<String> = MaterialTable::default().names().iter().map(|n| n.to_string()).collect();
+            let objects: Vec<(Shape, &str)> = spheres
+                .iter()
+                .map(|((x, y, z), r, m)| (Shape::sphere(DVec3::new(*x, *y, *z), *r).unwrap(), names[*m].as_str()))
+                .collect();
+            let w = world(&objects);
+            let (mut tr, mut q, mut active) = (Tracer::default(), RayQuery::default(), Vec::new());
+            for ((dx, dy), dz) in rays {
+                let d = DVec3::new(dx, dy, dz);
+                if d.length() < 1e-3 {
+                    continue;
+                }
+                let ray = Ray::new(DVec3::new(0.0, 0.0, 0.5), d);
+                for band in [Band::Radar, Band::Laser, Band::Surface] {
+                    let pruned = tr.trace(&w, &ray, band, budget, 30.0);
+                    let all = w.ray_intervals(&ray, 30.0, &mut q);
+                    let whole = walk(all, &w, band, budget, 30.0, &mut active);
+                    proptest::prop_assert_eq!(pruned, whole);
+                }
+            }
+        }
+    }
+
     #[test]
     fn nothing_within_range_gives_infinity_and_ray_starting_inside_pays_from_zero() {
         let w = world(&[(sphere(5.0, 0.0, 1.0), "concrete")]);
         let mut tr = Tracer::default();
-        assert_eq!(tr.trace(&w, &x_ray(0.0), Band::Radar, 3.0, 3.9).kind, HitKind::None);
+        assert_eq!(
+            tr.trace(&w, &x_ray(0.0), Band::Radar, 3.0, 3.9).kind,
+            HitKind::None
+        );
         let w = world(&[(sphere(0.0, 0.0, 2.0), "foliage_dense")]);
         let r = tr.trace(&w, &x_ray(0.0), Band::Radar, 3.0, 20.0);
         assert!((r.range - 1.0).abs() < 1e-12 && r.kind == HitKind::Exhausted);

@@ -1,5 +1,6 @@
 //! The 3D world: objects (shape + material) and the ray query every sensor is built on.
 
+pub mod forest;
 pub mod material;
 pub mod shape;
 
@@ -48,6 +49,16 @@ pub struct World {
     materials: MaterialTable,
     objects: Vec<Object>,
     bvh: Bvh,
+    /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
+    solid: Vec<u8>,
+}
+
+fn band_bit(band: Band) -> u8 {
+    match band {
+        Band::Radar => 1,
+        Band::Laser => 2,
+        Band::Surface => 4,
+    }
 }
 
 impl std::fmt::Debug for World {
@@ -70,10 +81,22 @@ impl World {
             })
             .collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
+        let solid = objects
+            .iter()
+            .map(|o| {
+                let m = materials.get(o.material);
+                [Band::Radar, Band::Laser, Band::Surface]
+                    .into_iter()
+                    .filter(|b| m.attenuation_db_per_m(*b).is_infinite())
+                    .map(band_bit)
+                    .sum()
+            })
+            .collect();
         Self {
             materials,
             objects,
             bvh,
+            solid,
         }
     }
 
@@ -90,12 +113,10 @@ impl World {
     /// Axis-aligned bounds of all objects, or `None` for an empty world.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         (!self.objects.is_empty()).then(|| {
-            self.objects
-                .iter()
-                .map(|o| o.shape.aabb())
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), (a, b)| {
-                    (lo.min(a), hi.max(b))
-                })
+            self.objects.iter().map(|o| o.shape.aabb()).fold(
+                (DVec3::INFINITY, DVec3::NEG_INFINITY),
+                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+            )
         })
     }
 
@@ -106,6 +127,43 @@ impl World {
         let pray = ParryRay::new(ray.origin, ray.dir);
         for leaf in self.bvh.leaves(|node| node.cast_ray(&pray, t_max) <= t_max) {
             self.push_object(leaf, ray, t_max, &mut q.spans, &mut q.intervals);
+        }
+        sort_intervals(&mut q.intervals);
+        &q.intervals
+    }
+
+    /// Like [`World::ray_intervals`], but without the intervals that begin beyond the nearest
+    /// entry into a material solid to `band`: no ray of that band gets past it, so the
+    /// traversal skips every subtree behind it. The walk of a sensor ray over these intervals
+    /// ends exactly where it would over all of them.
+    pub fn ray_intervals_to_solid<'q>(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        band: Band,
+        q: &'q mut RayQuery,
+    ) -> &'q [Interval] {
+        q.intervals.clear();
+        let pray = ParryRay::new(ray.origin, ray.dir);
+        let bit = band_bit(band);
+        let bound = std::cell::Cell::new(t_max);
+        for leaf in self
+            .bvh
+            .leaves(|node| node.cast_ray(&pray, bound.get()) <= bound.get())
+        {
+            let start = q.intervals.len();
+            self.push_object(leaf, ray, bound.get(), &mut q.spans, &mut q.intervals);
+            if self.solid[leaf as usize] & bit != 0 {
+                for iv in &q.intervals[start..] {
+                    bound.set(bound.get().min(iv.t_in.max(0.0)));
+                }
+            }
+        }
+        let bound = bound.get();
+        // Intervals gathered before the bound tightened are dropped too, so the result does
+        // not depend on the traversal order.
+        if bound < t_max {
+            q.intervals.retain(|iv| iv.t_in.max(0.0) <= bound);
         }
         sort_intervals(&mut q.intervals);
         &q.intervals
@@ -179,33 +237,46 @@ mod tests {
         let c = (-8.0..8.0f64, -8.0..8.0f64, 0.0..3.0f64);
         let p2 = (-8.0..8.0f64, -8.0..8.0f64);
         prop_oneof![
-            (c.clone(), 0.1..3.0f64)
-                .prop_map(|((x, y, z), r)| Shape::sphere(DVec3::new(x, y, z), r).unwrap()),
-            (c.clone(), (0.1..4.0f64, 0.1..4.0f64, 0.1..4.0f64), -3.2..3.2f64).prop_map(
-                |((x, y, z), (a, b, h), yaw)| Shape::cuboid(
+            (c.clone(), 0.1..3.0f64).prop_map(|((x, y, z), r)| Shape::sphere(
+                DVec3::new(x, y, z),
+                r
+            )
+            .unwrap()),
+            (
+                c.clone(),
+                (0.1..4.0f64, 0.1..4.0f64, 0.1..4.0f64),
+                -3.2..3.2f64
+            )
+                .prop_map(|((x, y, z), (a, b, h), yaw)| Shape::cuboid(
                     DVec3::new(x, y, z),
                     DVec3::new(a, b, h),
                     yaw
                 )
-                .unwrap()
-            ),
+                .unwrap()),
             (c, 0.1..2.0f64, 0.2..4.0f64).prop_map(|((x, y, z), r, h)| Shape::cylinder(
                 DVec3::new(x, y, z),
                 r,
                 h
             )
             .unwrap()),
-            (prop::collection::vec(p2.clone(), 2..5), 0.05..0.5f64, 0.5..3.0f64).prop_filter_map(
-                "distinct points",
-                |(pts, t, h)| Shape::wall(
+            (
+                prop::collection::vec(p2.clone(), 2..5),
+                0.05..0.5f64,
+                0.5..3.0f64
+            )
+                .prop_filter_map("distinct points", |(pts, t, h)| Shape::wall(
                     pts.into_iter().map(|(x, y)| DVec2::new(x, y)).collect(),
                     t,
                     h
                 )
-                .ok()
-            ),
+                .ok()),
             // Star-shaped polygons are simple by construction, and often concave.
-            ((-6.0..6.0f64, -6.0..6.0f64), prop::collection::vec(0.3..3.0f64, 3..9), 0.0..1.0f64, 0.2..3.0f64)
+            (
+                (-6.0..6.0f64, -6.0..6.0f64),
+                prop::collection::vec(0.3..3.0f64, 3..9),
+                0.0..1.0f64,
+                0.2..3.0f64
+            )
                 .prop_filter_map("valid prism", |((cx, cy), radii, z0, h)| {
                     let n = radii.len();
                     let poly = radii

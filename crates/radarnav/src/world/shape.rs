@@ -97,19 +97,19 @@ impl OrientedBox {
     }
 
     /// World vector into the box frame (rotation only).
-    fn to_local(&self, v: DVec3) -> DVec3 {
+    fn local_vec(&self, v: DVec3) -> DVec3 {
         let (c, s) = (self.cos_sin.x, self.cos_sin.y);
         DVec3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z)
     }
 
     fn interval(&self, ray: &Ray) -> Option<(f64, f64)> {
-        let o = self.to_local(ray.origin - self.center);
-        let d = self.to_local(ray.dir);
+        let o = self.local_vec(ray.origin - self.center);
+        let d = self.local_vec(ray.dir);
         slab_interval(o, d, -self.half, self.half)
     }
 
     fn contains(&self, p: DVec3) -> bool {
-        let l = self.to_local(p - self.center);
+        let l = self.local_vec(p - self.center);
         l.abs().cmple(self.half).all()
     }
 
@@ -254,7 +254,11 @@ impl Shape {
         for (what, v) in [("size.x", size.x), ("size.y", size.y), ("size.z", size.z)] {
             positive(what, v)?;
         }
-        Ok(Self::Box(OrientedBox::new(center, size, finite("yaw", yaw)?)))
+        Ok(Self::Box(OrientedBox::new(
+            center,
+            size,
+            finite("yaw", yaw)?,
+        )))
     }
 
     /// A vertical cylinder around its geometric centre.
@@ -468,10 +472,11 @@ impl Shape {
                 z_min,
                 z_max,
             } => {
-                let (lo, hi) = polygon.iter().fold(
-                    (DVec2::INFINITY, DVec2::NEG_INFINITY),
-                    |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-                );
+                let (lo, hi) = polygon
+                    .iter()
+                    .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(*p), hi.max(*p))
+                    });
                 (lo.extend(*z_min), hi.extend(*z_max))
             }
         }
@@ -569,8 +574,12 @@ mod tests {
 
     #[test]
     fn rotated_box_diagonal() {
-        let b = Shape::cuboid(DVec3::new(0.0, 0.0, 1.0), DVec3::splat(2.0), 45f64.to_radians())
-            .unwrap();
+        let b = Shape::cuboid(
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::splat(2.0),
+            45f64.to_radians(),
+        )
+        .unwrap();
         // Along x through the centre of a 45° box: corner to corner, half diagonal sqrt(2).
         let iv = intervals(&b, &ray([-5.0, 0.0, 1.0], [1.0, 0.0, 0.0]));
         let h = 2f64.sqrt();
@@ -591,7 +600,11 @@ mod tests {
     fn wall_corner_is_one_interval() {
         // An L-shaped wall: a ray along the first leg through the corner stays inside throughout.
         let w = Shape::wall(
-            vec![DVec2::new(0.0, 0.0), DVec2::new(4.0, 0.0), DVec2::new(4.0, 4.0)],
+            vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(4.0, 0.0),
+                DVec2::new(4.0, 4.0),
+            ],
             0.2,
             2.0,
         )
@@ -621,7 +634,10 @@ mod tests {
         .unwrap();
         let iv = intervals(&u, &ray([-1.0, 1.5, 0.5], [1.0, 0.0, 0.0]));
         assert_eq!(iv.len(), 2);
-        assert!(close(iv[0], (1.0, 2.0)) && close(iv[1], (3.0, 4.0)), "{iv:?}");
+        assert!(
+            close(iv[0], (1.0, 2.0)) && close(iv[1], (3.0, 4.0)),
+            "{iv:?}"
+        );
         // Along the notch floor (y = 1 passes through two inner vertices) the half-open rule
         // counts the vertices once: the boundary line is inside from x = 0 to x = 3.
         let iv = intervals(&u, &ray([-1.0, 1.0, 0.5], [1.0, 0.0, 0.0]));
