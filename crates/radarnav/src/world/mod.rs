@@ -349,6 +349,45 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// An independent implementation agrees on where a ray first enters a convex shape:
+        /// parry3d's own ray casts on Ball, Cuboid and Cylinder (parry's cylinder axis is y,
+        /// turned to z here).
+        #[test]
+        fn first_entry_matches_parry(shape in arb_shape(), ray in arb_ray()) {
+            use parry3d_f64::math::Pose as PPose;
+            use parry3d_f64::query::RayCast;
+            use parry3d_f64::shape::{Ball, Cuboid, Cylinder};
+            let pray = ParryRay::new(ray.origin, ray.dir);
+            let theirs = match &shape {
+                Shape::Sphere { center, radius } => {
+                    Ball::new(*radius).cast_ray(&PPose::new(*center, DVec3::ZERO), &pray, 100.0, true)
+                }
+                Shape::Box(b) => Cuboid::new(b.half).cast_ray(
+                    &PPose::new(b.center, DVec3::new(0.0, 0.0, b.yaw)), &pray, 100.0, true),
+                Shape::Cylinder { center, radius, half_height } => Cylinder::new(*half_height, *radius)
+                    .cast_ray(&PPose::new(*center, DVec3::new(std::f64::consts::FRAC_PI_2, 0.0, 0.0)),
+                              &pray, 100.0, true),
+                _ => return Ok(()),
+            };
+            let mut iv = Vec::new();
+            shape.ray_intervals(&ray, &mut iv);
+            let ours = iv.iter().find(|(_, b)| *b > 0.0).map(|(a, _)| a.max(0.0)).filter(|t| *t <= 100.0);
+            match (ours, theirs) {
+                (Some(a), Some(b)) => prop_assert!((a - b).abs() < 1e-6, "ours {} parry {}", a, b),
+                (None, None) => {}
+                // Only a grazing touch may be seen by one side alone.
+                (Some(a), None) => {
+                    let chord: f64 = iv.iter().map(|(x, y)| y - x).sum();
+                    prop_assert!(chord < 1e-6, "ours {} parry none, intervals {:?}", a, iv);
+                }
+                (None, Some(b)) => {
+                    prop_assert!(!shape.contains(ray.at(b + 1e-4)), "parry {} ours none", b);
+                }
+            }
+        }
+    }
+
     #[test]
     fn objects_at_finds_containing_objects() {
         let w = world_of(vec![

@@ -1,0 +1,153 @@
+//! The `radarnav` binary end to end: files written, same seed same bytes, clear errors.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn radarnav(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_radarnav"))
+        .args(args)
+        .output()
+        .expect("run radarnav")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn read(dir: &Path, file: &str) -> Vec<u8> {
+    std::fs::read(dir.join(file)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(file).display()))
+}
+
+#[test]
+fn scan_writes_files_and_same_seed_gives_same_bytes() {
+    let (a, b, c) = (tmp("scan-a"), tmp("scan-b"), tmp("scan-c"));
+    for (dir, seed) in [(&a, "5"), (&b, "5"), (&c, "6")] {
+        let out = radarnav(&[
+            "scan",
+            "foliage-wall",
+            "--sensor",
+            "radar_thesis_n100",
+            "--seed",
+            seed,
+            "--pose",
+            "2.5,3,10",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    for f in ["scan.json", "scan.csv", "scan.png"] {
+        assert_eq!(read(&a, f), read(&b, f), "{f} differs for the same seed");
+    }
+    assert_ne!(
+        read(&a, "scan.json"),
+        read(&c, "scan.json"),
+        "a new seed draws new side beams"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&read(&a, "scan.json")).unwrap();
+    assert_eq!(json["scan"]["ranges"].as_array().unwrap().len(), 360);
+    assert_eq!(json["config"]["side_beam_offset"].as_f64(), Some(0.4));
+    let csv = String::from_utf8(read(&a, "scan.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 361);
+    assert!(csv.starts_with("index,azimuth_deg,elevation_deg,range_m,hit,material,beam\n"));
+}
+
+#[test]
+fn demo_writes_the_four_figures_and_the_table() {
+    let dir = tmp("demo");
+    let out = radarnav(&["demo", "--out", dir.to_str().unwrap(), "--repeats", "3"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in [
+        "fig7_laser",
+        "fig8_radar",
+        "fig9_radar_n50",
+        "fig10_radar_n100",
+        "ground_truth",
+    ] {
+        assert!(
+            read(&dir, &format!("{f}.png")).starts_with(b"\x89PNG"),
+            "{f}"
+        );
+    }
+    let table = String::from_utf8(out.stdout).unwrap();
+    let share = |fig: &str| -> f64 {
+        let line = table
+            .lines()
+            .find(|l| l.starts_with(fig))
+            .unwrap_or_else(|| panic!("{table}"));
+        line.split_whitespace()
+            .last()
+            .unwrap()
+            .trim_end_matches('%')
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(share("fig7_laser"), 0.0);
+    assert!(
+        share("fig8_radar") > 0.0 && share("fig10_radar_n100") > 0.0,
+        "{table}"
+    );
+}
+
+#[test]
+fn errors_are_reported_with_location_and_exit_code_one() {
+    let dir = tmp("errors");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[[object]]\nmaterial = \"wood\"\nsphere = { center = [1, 2], radius = 0 }\n",
+    )
+    .unwrap();
+    let out = radarnav(&[
+        "render",
+        bad.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        err.contains("bad.toml:3:38: `radius`: expected a finite number > 0, found 0"),
+        "{err}"
+    );
+    for args in [
+        &["scan", "no-such-scenario", "--sensor", "radar"][..],
+        &["scan", "foliage-wall", "--sensor", "velodyne"],
+        &["scan", "foliage-wall", "--sensor", "radar", "--pose", "1,2"],
+        &["render", dir.join("missing.toml").to_str().unwrap()],
+    ] {
+        let out = radarnav(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn listings() {
+    let out = radarnav(&["scenarios"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    for name in ["foliage-wall", "smoke-room", "open-field"] {
+        assert!(text.contains(name), "{text}");
+    }
+    let out = radarnav(&["presets"]);
+    assert!(
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .contains("radar_thesis_n50")
+    );
+}
