@@ -3,7 +3,9 @@
 //!
 //! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
 //! Modules: [`world`] (shapes, materials, ray intervals), [`scenario`] (TOML files and the
-//! built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`render`] (figures).
+//! built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`render`] (figures), [`demo`] (the thesis experiment).
+
+#![warn(missing_docs)]
 
 pub mod demo;
 pub mod pose;

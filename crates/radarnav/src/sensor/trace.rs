@@ -63,8 +63,23 @@ impl Tracer {
         budget_db: f64,
         t_max: f64,
     ) -> Return {
-        let intervals = world.ray_intervals_to_solid(ray, t_max, band, &mut self.query);
-        walk(intervals, world, band, budget_db, t_max, &mut self.active)
+        // The ground plane z = 0 is solid to every sensor; a ray tilted down ends on it.
+        let t_ground = if ray.dir.z < 0.0 {
+            (-ray.origin.z / ray.dir.z).max(0.0)
+        } else {
+            f64::INFINITY
+        };
+        let reach = t_max.min(t_ground);
+        let intervals = world.ray_intervals_to_solid(ray, reach, band, &mut self.query);
+        let ret = walk(intervals, world, band, budget_db, reach, &mut self.active);
+        if ret.kind == HitKind::None && t_ground <= t_max {
+            return Return {
+                range: t_ground,
+                kind: HitKind::Solid,
+                material: Some(world.ground_material()),
+            };
+        }
+        ret
     }
 }
 
@@ -249,7 +264,8 @@ mod tests {
         fn pruned_trace_equals_walk_over_all_intervals(
             spheres in proptest::collection::vec(
                 ((-20.0..20.0f64, -20.0..20.0f64, 0.0..2.0f64), 0.2..3.0f64, 0usize..9), 1..60),
-            rays in proptest::collection::vec(((-1.0..1.0f64, -1.0..1.0f64), -0.2..0.2f64), 1..10),
+            // Level or rising rays: the ground plane is a separate case with its own test.
+            rays in proptest::collection::vec(((-1.0..1.0f64, -1.0..1.0f64), 0.0..0.2f64), 1..10),
             budget in 0.1..12.0f64,
         ) {
             let names: Vec<String> = MaterialTable::default().names().iter().map(|n| n.to_string()).collect();
@@ -273,6 +289,33 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_ray_tilted_down_ends_on_the_ground_unless_something_is_nearer() {
+        let w = world(&[(sphere(5.0, 0.0, 1.0), "smoke")]);
+        let mut tr = Tracer::default();
+        let el = 10f64.to_radians();
+        let down = Ray::new(
+            DVec3::new(0.0, 3.0, 0.4),
+            DVec3::new(el.cos(), 0.0, -el.sin()),
+        );
+        let r = tr.trace(&w, &down, Band::Radar, 3.0, 20.0);
+        assert_eq!(
+            (r.kind, r.material),
+            (HitKind::Solid, Some(w.ground_material()))
+        );
+        assert!((r.range - 0.4 / el.sin()).abs() < 1e-12);
+        // Out of range: no return.
+        assert_eq!(
+            tr.trace(&w, &down, Band::Radar, 3.0, 2.0).kind,
+            HitKind::None
+        );
+        // The laser meets the smoke before the ground.
+        let into_smoke = Ray::new(DVec3::new(0.0, 0.0, 1.0), DVec3::new(1.0, 0.0, -0.1));
+        let l = tr.trace(&w, &into_smoke, Band::Laser, 3.0, 20.0);
+        assert_eq!(l.material, w.materials().id("smoke"));
+        assert!(l.range < 5.0);
     }
 
     #[test]

@@ -13,6 +13,7 @@
 //! | `dust` | 0.02 | 20 dB/m | < 0.02 dB/m at 94 GHz for 3000 mg/m³ (Wikner, ARL-TR-4399, 2008); the laser figure is our choice for a cloud a laser sees about half a metre into |
 //! | `glass` | 500 | 60 dB/m | ≈ 3 dB through a 6 mm pane at 77 GHz; ≈ 8 % loss per pane at 905 nm: a laser sees through windows |
 //! | `concrete`, `wood`, `metal`, `absorber` | solid | opaque | stop both rays at the surface |
+//! | `ground` | solid | opaque | the plane z = 0 under every world; a ray tilted down ends there |
 //!
 //! Radar reflectivities (power fraction at normal incidence) are rough values from 60–77 GHz
 //! reflection measurements (metal ≈ 1, concrete ≈ 0.35, wood ≈ 0.2, glass ≈ 0.25, foliage ≈
@@ -124,6 +125,7 @@ pub fn builtin_materials() -> Vec<Material> {
         builtin("smoke", 0.0, 0.0, false, None, true, [175, 170, 185]),
         builtin("dust", 0.02, 0.0, false, Some(20.0), true, [205, 185, 140]),
         builtin("absorber", inf, 0.0, false, None, false, [60, 40, 60]),
+        builtin("ground", inf, 0.15, false, None, true, [200, 190, 160]),
     ]
 }
 
@@ -198,6 +200,7 @@ mod tests {
             "smoke",
             "dust",
             "absorber",
+            "ground",
         ] {
             assert!(t.id(name).is_some(), "{name}");
         }

@@ -51,6 +51,7 @@ pub struct World {
     bvh: Bvh,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
+    ground: MaterialId,
 }
 
 fn band_bit(band: Band) -> u8 {
@@ -92,17 +93,24 @@ impl World {
                     .sum()
             })
             .collect();
+        let ground = materials.id("ground").expect("built-ins are never removed");
         Self {
             materials,
             objects,
             bvh,
             solid,
+            ground,
         }
     }
 
     /// The material table.
     pub fn materials(&self) -> &MaterialTable {
         &self.materials
+    }
+
+    /// The material of the ground plane z = 0, which lies under every world.
+    pub fn ground_material(&self) -> MaterialId {
+        self.ground
     }
 
     /// The objects, in scenario order.
