@@ -208,17 +208,14 @@ impl Figure {
             if r == f64::NEG_INFINITY {
                 continue;
             }
-            let (rgb, alpha, end) = match scan.hits[i] {
-                HitKind::Solid => (SOLID_RGB, 150, ray.at(r)),
-                HitKind::Exhausted => (EXHAUSTED_RGB, 190, ray.at(r)),
-                HitKind::None => (NONE_RGB, 40, ray.at(scan.range_max)),
+            let (rgb, alpha) = match scan.hits[i] {
+                HitKind::Solid => (SOLID_RGB, 150),
+                HitKind::Exhausted => (EXHAUSTED_RGB, 190),
+                HitKind::None => (NONE_RGB, 40),
             };
-            // A noisy reading past range_max is reported +inf though the ray hit something.
-            let end = if r.is_finite() {
-                end
-            } else {
-                ray.at(scan.range_max)
-            };
+            // A reading of +inf (no return, or noise pushed it past range_max) is drawn to
+            // range_max.
+            let end = ray.at(if r.is_finite() { r } else { scan.range_max });
             kinds[scan.hits[i] as usize] = true;
             let (a, b) = (self.px(ray.origin.truncate()), self.px(end.truncate()));
             let mut pb = PathBuilder::new();

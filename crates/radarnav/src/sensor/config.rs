@@ -295,9 +295,10 @@ impl SensorConfig {
                 "must list at least one angle, each strictly between -90 and 90",
             ),
             (
-                self.range_noise_std >= 0.0 && self.range_noise_rel >= 0.0,
+                (0.0..f64::INFINITY).contains(&self.range_noise_std)
+                    && (0.0..f64::INFINITY).contains(&self.range_noise_rel),
                 "range_noise_std",
-                "noise must be >= 0",
+                "and range_noise_rel must be finite and >= 0",
             ),
             (self.penetration_db > 0.0, "penetration_db", "must be > 0"),
             (
@@ -358,6 +359,9 @@ mod tests {
         let mut c = preset("radar_thesis").unwrap();
         c.range_min = 30.0;
         assert!(c.validate().unwrap_err().starts_with("range_min"));
+        let mut c = preset("sick_lms291").unwrap();
+        c.range_noise_std = f64::INFINITY;
+        assert!(c.validate().unwrap_err().starts_with("range_noise_std"));
         let mut c = preset("radar_thesis").unwrap();
         c.resolution = 1e-9;
         assert!(c.validate().unwrap_err().contains("rays per scan"));

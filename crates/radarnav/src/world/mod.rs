@@ -131,13 +131,7 @@ impl World {
     /// Every interval where `ray` is inside an object and that overlaps `(0, t_max)`, sorted by
     /// entry distance. Only objects whose bounding boxes the ray meets within `t_max` are tested.
     pub fn ray_intervals<'q>(&self, ray: &Ray, t_max: f64, q: &'q mut RayQuery) -> &'q [Interval] {
-        q.intervals.clear();
-        let pray = ParryRay::new(ray.origin, ray.dir);
-        for leaf in self.bvh.leaves(|node| node.cast_ray(&pray, t_max) <= t_max) {
-            self.push_object(leaf, ray, t_max, &mut q.spans, &mut q.intervals);
-        }
-        sort_intervals(&mut q.intervals);
-        &q.intervals
+        self.gather(ray, t_max, 0, q)
     }
 
     /// Like [`World::ray_intervals`], but without the intervals that begin beyond the nearest
@@ -151,9 +145,20 @@ impl World {
         band: Band,
         q: &'q mut RayQuery,
     ) -> &'q [Interval] {
+        self.gather(ray, t_max, band_bit(band), q)
+    }
+
+    /// The BVH query behind both public ones; `stop_bits` selects which solids bound the search
+    /// (0: none).
+    fn gather<'q>(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        stop_bits: u8,
+        q: &'q mut RayQuery,
+    ) -> &'q [Interval] {
         q.intervals.clear();
         let pray = ParryRay::new(ray.origin, ray.dir);
-        let bit = band_bit(band);
         let bound = std::cell::Cell::new(t_max);
         for leaf in self
             .bvh
@@ -161,15 +166,15 @@ impl World {
         {
             let start = q.intervals.len();
             self.push_object(leaf, ray, bound.get(), &mut q.spans, &mut q.intervals);
-            if self.solid[leaf as usize] & bit != 0 {
+            if self.solid[leaf as usize] & stop_bits != 0 {
                 for iv in &q.intervals[start..] {
                     bound.set(bound.get().min(iv.t_in.max(0.0)));
                 }
             }
         }
-        let bound = bound.get();
         // Intervals gathered before the bound tightened are dropped too, so the result does
         // not depend on the traversal order.
+        let bound = bound.get();
         if bound < t_max {
             q.intervals.retain(|iv| iv.t_in.max(0.0) <= bound);
         }
