@@ -86,6 +86,10 @@ enum Command {
         /// Scans per sensor.
         #[arg(long, default_value_t = 200)]
         scans: usize,
+        /// Replace the scenario's objects by a generated forest of this many foliage spheres
+        /// (over a square of 3 m × sqrt(N) a side, about one per 9 m²), the robot at its centre.
+        #[arg(long)]
+        forest: Option<usize>,
     },
 }
 
@@ -168,7 +172,11 @@ fn run(cli: Cli) -> Result<()> {
             &out,
             pixels,
         ),
-        Command::Bench { scenario, scans } => bench(&scenario, scans),
+        Command::Bench {
+            scenario,
+            scans,
+            forest,
+        } => bench(&scenario, scans, forest),
     }
 }
 
@@ -352,11 +360,18 @@ fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
         .with_context(|| format!("writing {}", path.display()))
 }
 
-fn bench(scenario: &str, scans: usize) -> Result<()> {
-    let s = load(scenario)?;
-    let r = s
+fn bench(scenario: &str, scans: usize, forest: Option<usize>) -> Result<()> {
+    let mut s = load(scenario)?;
+    let mut start = s
         .robot(None)
-        .with_context(|| format!("scenario `{}` has no robot", s.name))?;
+        .with_context(|| format!("scenario `{}` has no robot", s.name))?
+        .start;
+    if let Some(n) = forest {
+        s.world = radarnav::world::forest::forest(n, 3.0 * (n as f64).sqrt(), s.sim.seed);
+        s.name = format!("forest of {n} spheres, sensors of {}", s.name);
+        start = Pose::default();
+    }
+    let r = s.robot(None).context("scenario has no robot")?;
     let mut tracer = Tracer::default();
     let mut rng = ChaCha8Rng::seed_from_u64(s.sim.seed);
     say!(
@@ -366,7 +381,7 @@ fn bench(scenario: &str, scans: usize) -> Result<()> {
         scans
     );
     for m in &r.sensors {
-        let pose = r.start.compose(&m.mount);
+        let pose = start.compose(&m.mount);
         let t0 = Instant::now();
         let mut rays = 0usize;
         for k in 0..scans.max(1) {

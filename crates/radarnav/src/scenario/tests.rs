@@ -190,3 +190,46 @@ fn bad_colour_and_duplicate_material() {
     let e = err("[[material]]\nname = \"m\"\n");
     assert!(e.message.contains("radar_attenuation_db_per_m"), "{e}");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(400))]
+    /// Any edit of a valid file (characters replaced, inserted or cut, multi-byte ones too)
+    /// gives a scenario or an error that points inside the file; never a panic.
+    #[test]
+    fn mutated_files_never_panic(
+        edits in proptest::collection::vec((0usize..4000, 0usize..3, proptest::sample::select(vec![
+            "=", "[", "]", "{", "}", ",", "\"", "\n", "-", "0", "1e400", "inf", "nan", "é", "°",
+            "radius", "material", "sphere", "#", ".", " ", "[[object]]", "x = 1",
+        ])), 1..6),
+    ) {
+        let mut src = builtin_source("foliage-wall").unwrap().to_owned();
+        for (pos, op, text) in edits {
+            let mut at = pos % (src.len() + 1);
+            while !src.is_char_boundary(at) {
+                at -= 1;
+            }
+            match op {
+                0 => src.insert_str(at, text),
+                1 => {
+                    let mut end = (at + text.len()).min(src.len());
+                    while !src.is_char_boundary(end) {
+                        end += 1;
+                    }
+                    src.replace_range(at..end, text);
+                }
+                _ => {
+                    let mut end = (at + 1 + pos % 7).min(src.len());
+                    while !src.is_char_boundary(end) {
+                        end += 1;
+                    }
+                    src.replace_range(at..end, "");
+                }
+            }
+        }
+        if let Err(e) = parse(&src) {
+            let lines = src.lines().count().max(1);
+            proptest::prop_assert!(e.line >= 1 && e.line <= lines + 1, "{} (file has {} lines)", e, lines);
+            proptest::prop_assert!(!e.message.is_empty());
+        }
+    }
+}
