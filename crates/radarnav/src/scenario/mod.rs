@@ -292,10 +292,15 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                 .or(base.as_ref().map(|b| b.specular))
                 .unwrap_or(false),
             laser_opaque,
+            // An opaque base stores an infinite laser attenuation; a variant made see-through
+            // must not inherit it, or `laser_opaque = false` would change nothing.
             laser_attenuation_db_per_m: m
                 .laser_attenuation_db_per_m
                 .map(|v| v.0)
-                .or(base.as_ref().map(|b| b.laser_attenuation_db_per_m))
+                .or(base
+                    .as_ref()
+                    .map(|b| b.laser_attenuation_db_per_m)
+                    .filter(|a| a.is_finite() || laser_opaque))
                 .unwrap_or(if laser_opaque { f64::INFINITY } else { 0.0 }),
             traversable: m
                 .traversable

@@ -49,6 +49,7 @@ fn resting_centres_and_defaults() {
 fn user_material_with_base_and_override() {
     let s = parse(
         "[[material]]\nname = \"wet\"\nbase = \"foliage_dense\"\nradar_attenuation_db_per_m = 7.0\n\
+         [[material]]\nname = \"sheer\"\nbase = \"foliage_light\"\nlaser_opaque = false\n\
          [[material]]\nname = \"mine\"\nradar_attenuation_db_per_m = inf\ncolor = \"#102030\"\n\
          [[object]]\nmaterial = \"wet\"\nsphere = { center = [0, 0], radius = 1 }\n",
     )
@@ -57,6 +58,9 @@ fn user_material_with_base_and_override() {
     let wet = t.get(t.id("wet").unwrap());
     assert_eq!(wet.radar_attenuation_db_per_m, 7.0);
     assert!(wet.laser_opaque && !wet.traversable);
+    let sheer = t.get(t.id("sheer").unwrap());
+    assert!(!sheer.laser_opaque);
+    assert_eq!(sheer.attenuation_db_per_m(crate::world::Band::Laser), 0.0);
     let mine = t.get(t.id("mine").unwrap());
     assert!(mine.radar_attenuation_db_per_m.is_infinite());
     assert_eq!(mine.color, [0x10, 0x20, 0x30]);

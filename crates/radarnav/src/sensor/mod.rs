@@ -183,10 +183,7 @@ impl SensorConfig {
             } else {
                 0.0
             };
-            let (az, el) = (
-                out.angle_min + (i % azimuths) as f64 * out.angle_increment,
-                out.elevations[i / azimuths],
-            );
+            let (az, el) = out.angles(i);
             let ray = beam_ray(pose, az, el, beam.side() * out.side_beam_offset);
             let ret = tracer.trace(world, &ray, band, self.penetration_db, self.range_max);
             out.ranges

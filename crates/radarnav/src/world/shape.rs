@@ -409,20 +409,28 @@ impl Shape {
                     return;
                 }
                 // Crossings of the line with the polygon's edges; the half-open side rule counts
-                // a vertex on the line exactly once, so crossings come in entry/exit pairs.
-                let mut ts: Vec<f64> = Vec::with_capacity(4);
+                // a vertex on the line exactly once, so crossings come in entry/exit pairs. They
+                // are staged in `out` itself (as `(t, t)`) so that no buffer is allocated per ray.
+                let start = out.len();
                 let n = polygon.len();
                 for i in 0..n {
                     let (a, b) = (polygon[i], polygon[(i + 1) % n]);
                     let (sa, sb) = (d.perp_dot(a - o), d.perp_dot(b - o));
                     if (sa >= 0.0) != (sb >= 0.0) {
                         let e = b - a;
-                        ts.push((a - o).perp_dot(e) / d.perp_dot(e));
+                        let t = (a - o).perp_dot(e) / d.perp_dot(e);
+                        out.push((t, t));
                     }
                 }
-                ts.sort_by(f64::total_cmp);
-                let start = out.len();
-                out.extend(ts.chunks_exact(2).filter_map(|p| overlap((p[0], p[1]), zs)));
+                out[start..].sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut w = start;
+                for k in (start..out.len().saturating_sub(1)).step_by(2) {
+                    if let Some(iv) = overlap((out[k].0, out[k + 1].0), zs) {
+                        out[w] = iv;
+                        w += 1;
+                    }
+                }
+                out.truncate(w);
                 merge_tail(out, start);
             }
         }
