@@ -1,5 +1,7 @@
 //! `radarnav`: the command line over the radarnav library.
 
+mod run_cmd;
+
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -9,7 +11,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use radarnav::demo::{result_figure, share_past_foliage, thesis_experiment};
 use radarnav::render::{Figure, save_png};
-use radarnav::scenario::{BUILTIN_SCENARIOS, MountedSensor, vehicle_footprint};
+use radarnav::scenario::{BUILTIN_SCENARIOS, MountedSensor};
 use radarnav::sensor::{PRESETS, Tracer, preset};
 use radarnav::{Pose, Scan, Scenario};
 use rand::SeedableRng;
@@ -78,7 +80,36 @@ enum Command {
         #[arg(long, default_value_t = 900)]
         pixels: u32,
     },
+    /// Drive a scenario's mission and record it: trajectory.csv, scans/*.rnscan,
+    /// summary.json, path.png and run.mcap (Foxglove/Lichtblick).
+    Run {
+        /// A built-in name or a path to a .toml file.
+        scenario: String,
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Robot name (default: the mission's, else the first).
+        #[arg(long)]
+        robot: Option<String>,
+        /// Drive by a teleop CSV (`duration,v,omega_deg_s` or `duration,left,right`) instead
+        /// of the scenario's mission.
+        #[arg(long)]
+        teleop: Option<PathBuf>,
+        /// Seed (default: the scenario's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Longest simulated time, seconds (default: the scenario's).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Do not write run.mcap.
+        #[arg(long)]
+        no_mcap: bool,
+        /// Longer side of the map area of path.png, pixels.
+        #[arg(long, default_value_t = 900)]
+        pixels: u32,
+    },
     /// Time scans of every sensor of a scenario's first robot; prints rays per second.
+    /// With --sim, time a whole simulated run instead.
     Bench {
         /// A built-in name or a path to a .toml file.
         #[arg(default_value = "foliage-wall")]
@@ -90,6 +121,10 @@ enum Command {
         /// (over a square of 3 m × sqrt(N) a side, about one per 9 m²), the robot at its centre.
         #[arg(long)]
         forest: Option<usize>,
+        /// Simulate this many seconds of the scenario's mission (waypoints repeat) without
+        /// recording, and print simulated time per wall time.
+        #[arg(long)]
+        sim: Option<f64>,
     },
 }
 
@@ -143,8 +178,7 @@ fn run(cli: Cli) -> Result<()> {
             let s = load(&scenario)?;
             let mut fig = Figure::of_world(&s.world, None, pixels)?;
             for r in &s.robots {
-                let (l, w) = vehicle_footprint(&r.vehicle);
-                fig.draw_robot(&r.start, l, w);
+                fig.draw_robot(&r.start, r.vehicle);
             }
             let path = out.join(format!("{}.png", s.name));
             create_dir(&out)?;
@@ -172,11 +206,43 @@ fn run(cli: Cli) -> Result<()> {
             &out,
             pixels,
         ),
+        Command::Run {
+            scenario,
+            out,
+            robot,
+            teleop,
+            seed,
+            duration,
+            no_mcap,
+            pixels,
+        } => {
+            let s = load(&scenario)?;
+            let base = Path::new(&scenario)
+                .exists()
+                .then(|| Path::new(&scenario).parent().map(Path::to_owned))
+                .flatten();
+            run_cmd::run(&run_cmd::RunArgs {
+                scenario: &s,
+                base: base.as_deref(),
+                out: &out,
+                robot: robot.as_deref(),
+                teleop: teleop.as_deref(),
+                seed,
+                duration,
+                mcap: !no_mcap,
+                pixels,
+            })
+        }
         Command::Bench {
             scenario,
             scans,
             forest,
-        } => bench(&scenario, scans, forest),
+            sim,
+        } => match (sim, forest) {
+            (Some(_), Some(_)) => bail!("--sim and --forest do not go together"),
+            (Some(seconds), None) => run_cmd::bench_sim(&load(&scenario)?, seconds),
+            (None, _) => bench(&scenario, scans, forest),
+        },
     }
 }
 
@@ -300,8 +366,7 @@ fn scan(
     create_dir(out)?;
     let mut fig = Figure::of_world(&s.world, None, pixels)?;
     fig.draw_scan(&scan);
-    let (l, w) = vehicle_footprint(&r.vehicle);
-    fig.draw_robot(&robot_pose, l, w);
+    fig.draw_robot(&robot_pose, r.vehicle);
     save_png(
         &fig.finish(&format!("{} - {}", s.name, mounted.name)),
         &out.join("scan.png"),

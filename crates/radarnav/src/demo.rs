@@ -8,7 +8,7 @@ use thiserror::Error;
 use tiny_skia::Pixmap;
 
 use crate::render::{Figure, RenderError};
-use crate::scenario::{Scenario, vehicle_footprint};
+use crate::scenario::Scenario;
 use crate::sensor::{Scan, SensorConfig, Tracer, preset};
 use crate::world::{RayQuery, World};
 
@@ -174,8 +174,7 @@ pub fn result_figure(
     let mut fig = Figure::of_world(&scenario.world, None, pixels)?;
     fig.draw_scan(&result.scan);
     if let Some(robot) = scenario.robot(None) {
-        let (l, w) = vehicle_footprint(&robot.vehicle);
-        fig.draw_robot(&robot.start, l, w);
+        fig.draw_robot(&robot.start, robot.vehicle);
     }
     Ok(fig.finish(&result.title))
 }

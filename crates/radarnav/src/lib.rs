@@ -2,16 +2,24 @@
 //! through foliage, smoke and dust where a laser scanner cannot.
 //!
 //! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
-//! Modules: [`world`] (shapes, materials, ray intervals), [`scenario`] (TOML files and the
-//! built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`render`] (figures), [`demo`] (the thesis experiment).
+//! Modules: [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files
+//! and the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`]
+//! (the P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop),
+//! [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs: CSV, scan logs,
+//! MCAP), [`render`] (figures), [`demo`] (the thesis experiment).
 
 #![warn(missing_docs)]
 
 pub mod demo;
+pub mod mission;
+pub mod nav;
 pub mod pose;
+pub mod record;
 pub mod render;
 pub mod scenario;
 pub mod sensor;
+pub mod sim;
+pub mod vehicle;
 pub mod world;
 
 pub use pose::Pose;

@@ -7,6 +7,7 @@ use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, Trans
 
 use crate::pose::Pose;
 use crate::sensor::{HitKind, Scan};
+use crate::vehicle::VehicleSpec;
 use crate::world::{MaterialId, World};
 
 /// A figure could not be made or written.
@@ -240,8 +241,8 @@ impl Figure {
             (HitKind::None, "ray: no return"),
         ] {
             let rgb = [SOLID_RGB, EXHAUSTED_RGB, NONE_RGB][k as usize];
-            if kinds[k as usize] && !self.legend.iter().any(|(_, l)| l == label) {
-                self.legend.push((rgb, label.to_owned()));
+            if kinds[k as usize] {
+                self.add_legend(rgb, label);
             }
         }
     }
@@ -259,8 +260,73 @@ impl Figure {
         }
     }
 
-    /// Draws a robot footprint (`length` × `width`) at `pose` with a heading tick.
-    pub fn draw_robot(&mut self, pose: &Pose, length: f64, width: f64) {
+    /// Draws a polyline through `points` (a driven path), `width` pixels wide, with a legend
+    /// entry `label`.
+    pub fn draw_path(&mut self, points: &[DVec2], rgb: [u8; 3], width: f32, label: &str) {
+        let mut pb = PathBuilder::new();
+        for (k, p) in points.iter().enumerate() {
+            let (x, y) = self.px(*p);
+            if k == 0 {
+                pb.move_to(x, y);
+            } else {
+                pb.line_to(x, y);
+            }
+        }
+        if let Some(path) = pb.finish() {
+            let stroke = Stroke {
+                width,
+                line_join: tiny_skia::LineJoin::Round,
+                ..Stroke::default()
+            };
+            self.pixmap.stroke_path(
+                &path,
+                &paint(rgb, 230),
+                &stroke,
+                Transform::identity(),
+                None,
+            );
+        }
+        self.add_legend(rgb, label);
+    }
+
+    /// Marks each of `points` with a cross (events such as bumps), with a legend entry.
+    pub fn draw_crosses(&mut self, points: &[DVec2], rgb: [u8; 3], label: &str) {
+        if points.is_empty() {
+            return;
+        }
+        let mut pb = PathBuilder::new();
+        for p in points {
+            let (x, y) = self.px(*p);
+            pb.move_to(x - 5.0, y - 5.0);
+            pb.line_to(x + 5.0, y + 5.0);
+            pb.move_to(x - 5.0, y + 5.0);
+            pb.line_to(x + 5.0, y - 5.0);
+        }
+        if let Some(path) = pb.finish() {
+            let stroke = Stroke {
+                width: 2.0,
+                ..Stroke::default()
+            };
+            self.pixmap.stroke_path(
+                &path,
+                &paint(rgb, 255),
+                &stroke,
+                Transform::identity(),
+                None,
+            );
+        }
+        self.add_legend(rgb, label);
+    }
+
+    fn add_legend(&mut self, rgb: [u8; 3], label: &str) {
+        if !self.legend.iter().any(|(_, l)| l == label) {
+            self.legend.push((rgb, label.to_owned()));
+        }
+    }
+
+    /// Draws a vehicle's footprint at `pose` with a heading tick.
+    pub fn draw_robot(&mut self, pose: &Pose, vehicle: &VehicleSpec) {
+        let (length, width) = (vehicle.length, vehicle.width);
         let (s, c) = pose.yaw.sin_cos();
         let (fwd, left) = (DVec2::new(c, s), DVec2::new(-s, c));
         let m = DVec2::new(pose.x, pose.y);
@@ -277,9 +343,7 @@ impl Figure {
             m + hl * 0.6 - hw * 0.6,
         ];
         self.polygon(&nose, &paint([255, 255, 255], 255), None);
-        if !self.legend.iter().any(|(_, l)| l == "robot") {
-            self.legend.push(([30, 60, 200], "robot".to_owned()));
-        }
+        self.add_legend([30, 60, 200], "robot");
     }
 
     /// Writes the title, legend and scale bar; call once, last.
@@ -399,7 +463,7 @@ mod tests {
                 &mut Tracer::default(),
             );
             fig.draw_scan(&scan);
-            fig.draw_robot(&pose, 0.508, 0.497);
+            fig.draw_robot(&pose, &crate::vehicle::P3AT);
             fig.finish("test")
         };
         let a = make();

@@ -31,10 +31,14 @@ use std::ops::Range;
 use thiserror::Error;
 use toml::Spanned;
 
+use crate::mission::{
+    DEFAULT_CONTROLLER_HZ, Mission, MissionKind, TeleopSource, TeleopStep, WaypointMission,
+};
 use crate::pose::Pose;
 use crate::sensor::{SensorConfig, preset};
+use crate::vehicle::{DriveCommand, OdometryNoise, VEHICLES, VehicleSpec, vehicle};
 use crate::world::{Material, MaterialTable, Object, Shape, World};
-use spec::{Center, ObjectSpec, ScenarioSpec, SensorSpec, Xy};
+use spec::{Center, MissionSpec, ObjectSpec, ScenarioSpec, SensorSpec, Xy};
 
 /// A scenario file that could not be used: where, which key, and what is wrong.
 #[derive(Debug, Error, PartialEq)]
@@ -80,11 +84,13 @@ pub struct Robot {
     /// Unique name.
     pub name: String,
     /// Vehicle preset.
-    pub vehicle: String,
+    pub vehicle: &'static VehicleSpec,
     /// Start pose on the ground (z = 0).
     pub start: Pose,
     /// Its sensors.
     pub sensors: Vec<MountedSensor>,
+    /// Its odometry's noise.
+    pub odometry: OdometryNoise,
 }
 
 impl Robot {
@@ -107,19 +113,8 @@ pub struct Scenario {
     pub world: World,
     /// Robots.
     pub robots: Vec<Robot>,
-}
-
-/// Vehicle presets known so far: (name, footprint length, footprint width) in metres.
-/// P3AT: 0.508 × 0.497 m (Adept MobileRobots datasheet).
-pub const VEHICLES: &[(&str, f64, f64)] = &[("p3at", 0.508, 0.497)];
-
-/// Footprint (length, width) of a vehicle preset; the P3AT's for an unknown name.
-pub fn vehicle_footprint(name: &str) -> (f64, f64) {
-    let v = VEHICLES
-        .iter()
-        .find(|v| v.0 == name)
-        .unwrap_or(&VEHICLES[0]);
-    (v.1, v.2)
+    /// What a run does (`None`: the robot stands still while its sensors run).
+    pub mission: Option<Mission>,
 }
 
 struct Ctx<'a> {
@@ -197,6 +192,11 @@ impl Scenario {
             }
             robots.push(robot);
         }
+        let mission = spec
+            .mission
+            .as_ref()
+            .map(|m| build_mission(&ctx, m, &robots))
+            .transpose()?;
         Ok(Scenario {
             name: name.to_owned(),
             description: spec.description,
@@ -207,6 +207,7 @@ impl Scenario {
             },
             world: World::new(materials, objects),
             robots,
+            mission,
         })
     }
 
@@ -427,8 +428,8 @@ fn build_object(
 
 fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, ScenarioError> {
     let spec = r.get_ref();
-    if !VEHICLES.iter().any(|v| v.0 == spec.vehicle.get_ref()) {
-        let known: Vec<&str> = VEHICLES.iter().map(|v| v.0).collect();
+    let Some(vehicle) = vehicle(spec.vehicle.get_ref()) else {
+        let known: Vec<&str> = VEHICLES.iter().map(|v| v.name).collect();
         return Err(ctx.err(
             spec.vehicle.span(),
             Some("vehicle"),
@@ -438,7 +439,7 @@ fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, Scenari
                 known.join(", ")
             ),
         ));
-    }
+    };
     let mut sensors: Vec<MountedSensor> = Vec::new();
     for s in &spec.sensors {
         let sensor = build_sensor(ctx, s)?;
@@ -454,9 +455,20 @@ fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, Scenari
         }
         sensors.push(sensor);
     }
+    let o = &spec.odometry;
+    let d = OdometryNoise::default();
+    let odometry = OdometryNoise {
+        speed_noise: o.speed_noise.map_or(d.speed_noise, |v| v.0),
+        yaw_drift: o.yaw_drift_deg_s.map_or(d.yaw_drift, |v| v.0.to_radians()),
+        yaw_noise: o.yaw_noise_deg_s.map_or(d.yaw_noise, |v| v.0.to_radians()),
+    };
+    if !(odometry.speed_noise.is_finite() && odometry.yaw_noise.is_finite()) {
+        return Err(ctx.err(r.span(), Some("odometry"), "odometry noise must be finite"));
+    }
     Ok(Robot {
         name: spec.name.clone(),
-        vehicle: spec.vehicle.get_ref().clone(),
+        vehicle,
+        odometry,
         start: Pose::new(
             spec.start.x.0,
             spec.start.y.0,
@@ -514,6 +526,142 @@ fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, Sce
         name: spec.name.clone(),
         config: c,
         mount: Pose::new(m.x.0, m.y.0, m.z.0, m.yaw_deg.0.to_radians()),
+    })
+}
+
+fn build_mission(
+    ctx: &Ctx,
+    m: &Spanned<MissionSpec>,
+    robots: &[Robot],
+) -> Result<Mission, ScenarioError> {
+    let span = m.span();
+    let spec = m.get_ref();
+    if let Some(r) = &spec.robot
+        && !robots.iter().any(|x| &x.name == r.get_ref())
+    {
+        let known: Vec<&str> = robots.iter().map(|x| x.name.as_str()).collect();
+        return Err(ctx.err(
+            r.span(),
+            Some("robot"),
+            format!(
+                "unknown robot `{}`; robots: {}",
+                r.get_ref(),
+                known.join(", ")
+            ),
+        ));
+    }
+    if robots.is_empty() {
+        return Err(ctx.err(span, None, "a mission needs a `[[robot]]` to run it"));
+    }
+    // Keys that belong to the other kind are mistakes worth reporting, not ignoring.
+    let misplaced = |keys: &[(&str, bool)], kind: &str| {
+        keys.iter().find(|(_, given)| *given).map(|(k, _)| {
+            ctx.err(
+                span.clone(),
+                Some(k),
+                format!("not a key of a `{kind}` mission"),
+            )
+        })
+    };
+    let kind = match spec.kind.get_ref().as_str() {
+        "teleop" => {
+            if let Some(e) = misplaced(
+                &[
+                    ("points", spec.points.is_some()),
+                    ("speed", spec.speed.is_some()),
+                    ("tolerance", spec.tolerance.is_some()),
+                    ("loop", spec.repeat.is_some()),
+                ],
+                "teleop",
+            ) {
+                return Err(e);
+            }
+            let source = match (&spec.commands, &spec.file) {
+                (Some(c), None) => {
+                    if c.is_empty() {
+                        return Err(ctx.err(span, Some("commands"), "no commands"));
+                    }
+                    TeleopSource::Steps(
+                        c.iter()
+                            .map(|s| teleop_step(ctx, s))
+                            .collect::<Result<_, _>>()?,
+                    )
+                }
+                (None, Some(f)) => TeleopSource::File(f.get_ref().clone()),
+                _ => {
+                    return Err(ctx.err(
+                        span,
+                        None,
+                        "a teleop mission needs exactly one of `commands` or `file`",
+                    ));
+                }
+            };
+            MissionKind::Teleop(source)
+        }
+        "waypoints" => {
+            if let Some(e) = misplaced(
+                &[
+                    ("commands", spec.commands.is_some()),
+                    ("file", spec.file.is_some()),
+                ],
+                "waypoints",
+            ) {
+                return Err(e);
+            }
+            let points = xy(spec.points.as_deref().unwrap_or_default());
+            if points.is_empty() {
+                return Err(ctx.err(
+                    span,
+                    Some("points"),
+                    "a waypoints mission needs at least one point",
+                ));
+            }
+            MissionKind::Waypoints(WaypointMission {
+                points,
+                speed: spec.speed.map_or(0.5, |v| v.0),
+                tolerance: spec.tolerance.map_or(0.15, |v| v.0),
+                repeat: spec.repeat.unwrap_or(false),
+            })
+        }
+        other => {
+            return Err(ctx.err(
+                spec.kind.span(),
+                Some("type"),
+                format!("unknown mission type `{other}`; known: teleop, waypoints"),
+            ));
+        }
+    };
+    Ok(Mission {
+        robot: spec.robot.as_ref().map(|r| r.get_ref().clone()),
+        controller_hz: spec.controller_hz.map_or(DEFAULT_CONTROLLER_HZ, |v| v.0),
+        kind,
+    })
+}
+
+fn teleop_step(ctx: &Ctx, s: &Spanned<spec::TeleopStepSpec>) -> Result<TeleopStep, ScenarioError> {
+    let t = s.get_ref();
+    let twist = t.v.is_some() || t.omega_deg_s.is_some();
+    let tracks = t.left.is_some() || t.right.is_some();
+    let command = match (twist, tracks) {
+        (true, false) | (false, false) => DriveCommand::twist(
+            t.v.map_or(0.0, |v| v.0),
+            t.omega_deg_s.map_or(0.0, |v| v.0.to_radians()),
+        ),
+        (false, true) => DriveCommand::Tracks {
+            left: t.left.map_or(0.0, |v| v.0),
+            right: t.right.map_or(0.0, |v| v.0),
+        },
+        (true, true) => {
+            return Err(ctx.err(
+                s.span(),
+                None,
+                "give `v`/`omega_deg_s` or `left`/`right`, not both",
+            ));
+        }
+    };
+    Ok(TeleopStep {
+        duration: t.duration.0,
+        command,
     })
 }
 

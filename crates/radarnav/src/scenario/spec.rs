@@ -87,6 +87,51 @@ pub struct ScenarioSpec {
     /// Robots.
     #[serde(default, rename = "robot")]
     pub robots: Vec<Spanned<RobotSpec>>,
+    /// What the robot does in a run.
+    pub mission: Option<Spanned<MissionSpec>>,
+}
+
+/// `[mission]`: `type = "teleop"` (timed commands, inline or from a CSV file) or
+/// `type = "waypoints"` (go to each point in turn, steering on odometry).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissionSpec {
+    /// `"teleop"` or `"waypoints"`.
+    #[serde(rename = "type")]
+    pub kind: Spanned<String>,
+    /// The robot that runs it (default: the first).
+    pub robot: Option<Spanned<String>>,
+    /// How often the controller is called, Hz (default 10).
+    pub controller_hz: Option<Positive>,
+    /// teleop: the commands, in order.
+    pub commands: Option<Vec<Spanned<TeleopStepSpec>>>,
+    /// teleop: a CSV file of commands, relative to the scenario file.
+    pub file: Option<Spanned<String>>,
+    /// waypoints: the points to visit, `[x, y]` each.
+    pub points: Option<Vec<Xy>>,
+    /// waypoints: cruise speed, m/s (default 0.5).
+    pub speed: Option<Positive>,
+    /// waypoints: distance at which a point counts as reached, m (default 0.15).
+    pub tolerance: Option<Positive>,
+    /// waypoints: start over after the last point (default false).
+    #[serde(rename = "loop")]
+    pub repeat: Option<bool>,
+}
+
+/// One timed teleop command: `duration` plus either `v`/`omega_deg_s` or `left`/`right`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TeleopStepSpec {
+    /// How long the command is held, s.
+    pub duration: Positive,
+    /// Forward speed, m/s.
+    pub v: Option<Finite>,
+    /// Turn rate, degrees/s counter-clockwise.
+    pub omega_deg_s: Option<Finite>,
+    /// Left track speed, m/s.
+    pub left: Option<Finite>,
+    /// Right track speed, m/s.
+    pub right: Option<Finite>,
 }
 
 /// `[sim]`.
@@ -245,6 +290,21 @@ pub struct RobotSpec {
     /// `[[robot.sensor]]` entries.
     #[serde(default, rename = "sensor")]
     pub sensors: Vec<Spanned<SensorSpec>>,
+    /// Odometry noise (defaults: [`crate::vehicle::OdometryNoise::default`]).
+    #[serde(default)]
+    pub odometry: OdometrySpec,
+}
+
+/// `[robot.odometry]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OdometrySpec {
+    /// Relative standard deviation of each track speed per step.
+    pub speed_noise: Option<NonNegative>,
+    /// Constant turn-rate error, degrees/s.
+    pub yaw_drift_deg_s: Option<Finite>,
+    /// Turn-rate white noise, degrees/s.
+    pub yaw_noise_deg_s: Option<NonNegative>,
 }
 
 fn default_vehicle() -> Spanned<String> {

@@ -42,7 +42,7 @@ fn resting_centres_and_defaults() {
     assert_eq!(objs[2].shape.aabb().0.z, 2.0);
     assert_eq!(s.sim.dt, 0.05);
     assert_eq!(s.robots[0].start, Pose::new(1.0, 2.0, 0.0, 0.0));
-    assert_eq!(s.robots[0].vehicle, "p3at");
+    assert_eq!(s.robots[0].vehicle.name, "p3at");
 }
 
 #[test]
@@ -181,6 +181,85 @@ fn sensor_errors() {
     assert!(e.message.contains("robot name `r` is used twice"), "{e}");
     let e = err("[[robot]]\nname = \"r\"\nvehicle = \"tank\"\nstart = { x = 0, y = 0 }\n");
     assert_eq!((e.line, e.key.as_deref()), (3, Some("vehicle")));
+}
+
+#[test]
+fn missions_parse() {
+    let s = parse(&format!(
+        "{ROBOT}[mission]\ntype = \"teleop\"\ncontroller_hz = 20\ncommands = [\n  {{ duration = 2, v = 0.5 }},\n  {{ duration = 1, left = -0.1, right = 0.1 }},\n]\n"
+    ))
+    .unwrap();
+    let m = s.mission.unwrap();
+    assert_eq!(m.controller_hz, 20.0);
+    let MissionKind::Teleop(TeleopSource::Steps(steps)) = m.kind else {
+        panic!("teleop steps expected")
+    };
+    assert_eq!(steps[0].command, DriveCommand::twist(0.5, 0.0));
+    assert_eq!(
+        steps[1].command,
+        DriveCommand::Tracks {
+            left: -0.1,
+            right: 0.1
+        }
+    );
+    let s = parse(&format!(
+        "{ROBOT}[mission]\ntype = \"waypoints\"\nrobot = \"r\"\npoints = [[1, 1], [2, 3]]\nloop = true\n"
+    ))
+    .unwrap();
+    let m = s.mission.unwrap();
+    let MissionKind::Waypoints(w) = m.kind else {
+        panic!("waypoints expected")
+    };
+    assert_eq!(
+        (w.points.len(), w.speed, w.tolerance, w.repeat),
+        (2, 0.5, 0.15, true)
+    );
+    let s = parse(&format!(
+        "{ROBOT}[mission]\ntype = \"teleop\"\nfile = \"d.csv\"\n"
+    ))
+    .unwrap();
+    assert!(
+        s.mission.unwrap().controller().is_err(),
+        "an unread file cannot drive"
+    );
+    let odo = parse(&format!(
+        "{ROBOT}odometry = {{ speed_noise = 0.1, yaw_drift_deg_s = 1 }}\n"
+    ))
+    .unwrap();
+    let n = odo.robots[0].odometry;
+    assert_eq!(n.speed_noise, 0.1);
+    assert!((n.yaw_drift - 1f64.to_radians()).abs() < 1e-15);
+}
+
+#[test]
+fn mission_errors_name_the_key() {
+    let e = err(&format!(
+        "{ROBOT}[mission]\ntype = \"waypoints\"\nfile = \"x.csv\"\n"
+    ));
+    assert_eq!(e.key.as_deref(), Some("file"));
+    assert!(
+        e.message.contains("not a key of a `waypoints` mission"),
+        "{e}"
+    );
+    let e = err(&format!("{ROBOT}[mission]\ntype = \"waypoints\"\n"));
+    assert_eq!(e.key.as_deref(), Some("points"));
+    let e = err(&format!(
+        "{ROBOT}[mission]\ntype = \"teleop\"\nrobot = \"ghost\"\ncommands = [{{ duration = 1 }}]\n"
+    ));
+    assert_eq!((e.line, e.key.as_deref()), (6, Some("robot")));
+    let e = err(&format!(
+        "{ROBOT}[mission]\ntype = \"teleop\"\ncommands = [{{ duration = 1, v = 1, left = 1 }}]\n"
+    ));
+    assert!(e.message.contains("not both"), "{e}");
+    assert_eq!(e.line, 6);
+    let e = err(&format!(
+        "{ROBOT}[mission]\ntype = \"teleop\"\ncommands = [{{ duration = 0 }}]\n"
+    ));
+    assert_eq!(e.key.as_deref(), Some("duration"));
+    let e = err("[mission]\ntype = \"teleop\"\ncommands = [{ duration = 1 }]\n");
+    assert!(e.message.contains("needs a `[[robot]]`"), "{e}");
+    let e = err(&format!("{ROBOT}odometry = {{ speed_noise = -1 }}\n"));
+    assert_eq!(e.key.as_deref(), Some("speed_noise"));
 }
 
 #[test]

@@ -5,7 +5,7 @@ use serde::Serialize;
 use crate::world::Band;
 
 /// Which model a sensor follows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SensorKind {
     /// Radar, thesis model: penetrates materials with finite radar attenuation.

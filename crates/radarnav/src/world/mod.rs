@@ -2,6 +2,7 @@
 
 pub mod forest;
 pub mod material;
+pub mod overlap;
 pub mod shape;
 
 pub use material::{Band, Material, MaterialId, MaterialTable, builtin_materials};
@@ -220,6 +221,20 @@ impl World {
                     material: obj.material,
                 }),
         );
+    }
+
+    /// The first object (lowest index) that a robot cannot drive through and that overlaps
+    /// `body`; traversable materials (smoke, dust, the ground) never block.
+    pub fn blocking_object(&self, body: &OrientedBox) -> Option<usize> {
+        let (lo, hi) = body.aabb();
+        self.bvh
+            .leaves(move |node| node.mins().cmple(hi).all() && lo.cmple(node.maxs()).all())
+            .map(|i| i as usize)
+            .filter(|&i| {
+                let o = &self.objects[i];
+                !self.materials.get(o.material).traversable && o.shape.overlaps_box(body)
+            })
+            .min()
     }
 
     /// Indices of the objects containing point `p`.

@@ -113,7 +113,8 @@ impl OrientedBox {
         l.abs().cmple(self.half).all()
     }
 
-    fn aabb(&self) -> (DVec3, DVec3) {
+    /// Axis-aligned bounds `(min, max)`.
+    pub fn aabb(&self) -> (DVec3, DVec3) {
         let (c, s) = (self.cos_sin.x.abs(), self.cos_sin.y.abs());
         let ext = DVec3::new(
             c * self.half.x + s * self.half.y,

@@ -1,0 +1,261 @@
+//! `radarnav run` and `radarnav bench --sim`: a scenario's mission driven through the
+//! simulation loop.
+
+use std::fs;
+use std::io::{IsTerminal, Write};
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use radarnav::Scenario;
+use radarnav::mission::{MissionKind, TeleopSource, parse_teleop_csv};
+use radarnav::nav::{Idle, TeleopController};
+use radarnav::record::{RecordOptions, Recorder};
+use radarnav::scenario::Robot;
+use radarnav::sensor::Scan;
+use radarnav::sim::{Controller, NoObserver, Observer, RunSettings, RunSummary, Simulation, Step};
+
+/// What `run` and `bench --sim` share: which robot, which controller.
+pub struct Plan<'a> {
+    pub robot: &'a Robot,
+    pub controller: Box<dyn Controller>,
+    pub mission: &'static str,
+}
+
+/// The robot and controller of a run: `--teleop` wins over the scenario's mission; a teleop
+/// file named in the scenario is read relative to the scenario file (`base`).
+pub fn plan<'a>(
+    s: &'a Scenario,
+    robot: Option<&str>,
+    teleop: Option<&Path>,
+    base: Option<&Path>,
+    repeat: bool,
+) -> Result<Plan<'a>> {
+    let mission_robot = s.mission.as_ref().and_then(|m| m.robot.as_deref());
+    let name = robot.or(mission_robot);
+    let r = s.robot(name).with_context(|| match name {
+        Some(n) => format!("scenario `{}` has no robot `{n}`", s.name),
+        None => format!("scenario `{}` has no robot", s.name),
+    })?;
+    let read_csv = |path: &Path| -> Result<Box<dyn Controller>> {
+        let src = fs::read_to_string(path)
+            .with_context(|| format!("reading teleop file {}", path.display()))?;
+        let steps = parse_teleop_csv(&src, &path.display().to_string())?;
+        let hz = s
+            .mission
+            .as_ref()
+            .map_or(radarnav::mission::DEFAULT_CONTROLLER_HZ, |m| {
+                m.controller_hz
+            });
+        Ok(Box::new(TeleopController::new(steps, hz)))
+    };
+    if let Some(path) = teleop {
+        return Ok(Plan {
+            robot: r,
+            controller: read_csv(path)?,
+            mission: "teleop",
+        });
+    }
+    let Some(m) = &s.mission else {
+        return Ok(Plan {
+            robot: r,
+            controller: Box::new(Idle { rate_hz: 10.0 }),
+            mission: "none (standing still)",
+        });
+    };
+    if robot.is_some_and(|n| mission_robot.is_some_and(|mr| mr != n)) {
+        bail!(
+            "the scenario's mission is for robot `{}`; drop --robot or pass --teleop",
+            mission_robot.unwrap_or_default()
+        );
+    }
+    let controller = match &m.kind {
+        MissionKind::Teleop(TeleopSource::File(f)) => {
+            let path = base.map_or_else(|| Path::new(f).to_owned(), |b| b.join(f));
+            read_csv(&path)?
+        }
+        MissionKind::Waypoints(w) if repeat => {
+            let mut m = m.clone();
+            m.kind = MissionKind::Waypoints(radarnav::mission::WaypointMission {
+                repeat: true,
+                ..w.clone()
+            });
+            m.controller()?
+        }
+        _ => m.controller()?,
+    };
+    Ok(Plan {
+        robot: r,
+        controller,
+        mission: m.kind_name(),
+    })
+}
+
+/// Forwards to an inner observer and moves a progress bar (drawn only on a terminal).
+struct WithProgress<'a, O> {
+    inner: &'a mut O,
+    bar: ProgressBar,
+}
+
+impl<O: Observer> Observer for WithProgress<'_, O> {
+    type Error = O::Error;
+    fn on_scan(&mut self, i: usize, scan: &Scan) -> Result<(), O::Error> {
+        self.inner.on_scan(i, scan)
+    }
+    fn on_step(&mut self, step: &Step) -> Result<(), O::Error> {
+        self.bar.inc(1);
+        self.inner.on_step(step)
+    }
+}
+
+fn progress_bar(steps: u64, dt: f64) -> ProgressBar {
+    if !std::io::stdout().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(steps);
+    let style =
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar.set_message(format!("{:.0} s simulated", steps as f64 * dt));
+    bar
+}
+
+/// Runs a simulation to its end with a progress bar; returns the summary and wall seconds.
+fn drive<O: Observer>(
+    sim: &mut Simulation<'_>,
+    dt: f64,
+    obs: &mut O,
+) -> Result<(RunSummary, f64), O::Error> {
+    let bar = progress_bar(sim.total_steps(), dt);
+    let t0 = Instant::now();
+    let summary = sim.run(&mut WithProgress {
+        inner: obs,
+        bar: bar.clone(),
+    })?;
+    let wall = t0.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    Ok((summary, wall))
+}
+
+/// Options of `radarnav run`.
+pub struct RunArgs<'a> {
+    pub scenario: &'a Scenario,
+    pub base: Option<&'a Path>,
+    pub out: &'a Path,
+    pub robot: Option<&'a str>,
+    pub teleop: Option<&'a Path>,
+    pub seed: Option<u64>,
+    pub duration: Option<f64>,
+    pub mcap: bool,
+    pub pixels: u32,
+}
+
+fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> Result<RunSettings> {
+    if let Some(d) = duration
+        && !(d > 0.0 && d.is_finite())
+    {
+        bail!("--duration must be a number of seconds > 0, found {d}");
+    }
+    let base = RunSettings::of(s);
+    Ok(RunSettings {
+        seed: seed.unwrap_or(base.seed),
+        duration: duration.unwrap_or(base.duration),
+        ..base
+    })
+}
+
+/// `radarnav run`.
+pub fn run(a: &RunArgs<'_>) -> Result<()> {
+    let s = a.scenario;
+    let plan = plan(s, a.robot, a.teleop, a.base, false)?;
+    let settings = settings(s, a.seed, a.duration)?;
+    let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
+    let options = RecordOptions {
+        mcap: a.mcap,
+        ..RecordOptions::default()
+    };
+    let mut rec = Recorder::create(a.out, &s.world, plan.robot, options)?;
+    let (summary, wall) = drive(&mut sim, settings.dt, &mut rec)?;
+    let files = rec.finish(s, plan.robot, &summary, a.pixels)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: robot `{}`, mission {}, seed {}",
+        s.name, summary.robot, plan.mission, summary.seed
+    )?;
+    writeln!(
+        out,
+        "  {:?} after {:.1} s simulated in {:.2} s wall ({:.0}x real time)",
+        summary.outcome,
+        summary.duration,
+        wall,
+        summary.duration / wall.max(1e-9)
+    )?;
+    writeln!(
+        out,
+        "  drove {:.2} m (odometry {:.2} m, final error {:.3} m / {:.2} deg), {} bumps",
+        summary.distance,
+        summary.odometry_distance,
+        summary.odometry_error,
+        summary.odometry_yaw_error_deg,
+        summary.bumps
+    )?;
+    for c in &summary.sensors {
+        writeln!(
+            out,
+            "  {:<10} {:>6} scans at {} Hz",
+            c.name, c.scans, c.rate_hz
+        )?;
+    }
+    writeln!(out, "  wrote {} files to {}", files.len(), a.out.display())?;
+    Ok(())
+}
+
+/// `radarnav bench --sim SECONDS`: the scenario's mission (waypoints looping) for that long,
+/// with no recording; prints simulated seconds per wall second.
+pub fn bench_sim(s: &Scenario, seconds: f64) -> Result<()> {
+    let plan = plan(s, None, None, None, true)?;
+    let settings = settings(s, None, Some(seconds))?;
+    let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
+    let (summary, wall) = drive(&mut sim, settings.dt, &mut NoObserver).map_err(|e| match e {})?;
+    let rays: f64 = plan
+        .robot
+        .sensors
+        .iter()
+        .zip(&summary.sensors)
+        .map(|(m, c)| {
+            (m.config.azimuth_count() * m.config.elevations.len()) as f64 * c.scans as f64
+        })
+        .sum();
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: {:.0} s simulated (mission {}, {} steps) in {:.2} s wall: {:.1}x real time, {:.2} M rays/s",
+        s.name,
+        summary.duration,
+        plan.mission,
+        summary.steps,
+        wall,
+        summary.duration / wall.max(1e-9),
+        rays / wall.max(1e-9) / 1e6
+    )?;
+    for (m, c) in plan.robot.sensors.iter().zip(&summary.sensors) {
+        writeln!(
+            out,
+            "  {:<10} {:<16} {:>5} rays x {:>6} scans ({} Hz)",
+            c.name,
+            c.preset.as_deref().unwrap_or("-"),
+            m.config.azimuth_count() * m.config.elevations.len(),
+            c.scans,
+            c.rate_hz
+        )?;
+    }
+    writeln!(
+        out,
+        "  drove {:.1} m, {} bumps",
+        summary.distance, summary.bumps
+    )?;
+    Ok(())
+}

@@ -1,0 +1,364 @@
+//! An MCAP recording with Foxglove's protobuf schemas, so a run opens in Foxglove or Lichtblick.
+//!
+//! Channels (times are simulation time from 0):
+//! * `/world` (`foxglove.SceneUpdate`, once at t = 0): every object, coloured by material,
+//!   see-through for penetrable ones.
+//! * `/tf` (`foxglove.FrameTransform`): `world → <robot>/base_link` every step (true pose),
+//!   `<robot>/base_link → <robot>/<sensor>` once at t = 0 (the mounts).
+//! * `/<robot>/body` (`foxglove.SceneUpdate`, once): the vehicle's box, locked to `base_link`.
+//! * `/<robot>/pose` and `/<robot>/odometry` (`foxglove.PoseInFrame`, frame `world`, every step).
+//! * `/<robot>/scan/<sensor>` (`foxglove.LaserScan`, every scan): frame `world`, with the
+//!   sensor's exact pose at the scan's time (scans inside a step are taken on the arc);
+//!   intensities code how each ray ended: 0 no return, 1 budget ran out, 2 solid. A sensor with
+//!   several planes logs the one closest to horizontal.
+//! * `/<robot>/path` (`foxglove.PosesInFrame`, once at the end): the driven path.
+
+use std::collections::BTreeMap;
+use std::io::{Seek, Write};
+
+use foxglove::Encode;
+use foxglove::schemas::{
+    Color, CubePrimitive, CylinderPrimitive, FrameTransform, LaserScan, LinePrimitive, Point3,
+    Pose as FgPose, PoseInFrame, PosesInFrame, Quaternion, SceneEntity, SceneUpdate,
+    SpherePrimitive, Timestamp, Vector3, line_primitive,
+};
+
+use super::RecordError;
+use crate::pose::Pose;
+use crate::scenario::Robot;
+use crate::sensor::{HitKind, Scan};
+use crate::sim::Step;
+use crate::world::{Shape, World};
+
+/// Topic of the static world.
+pub const WORLD_TOPIC: &str = "/world";
+/// Topic of the transforms.
+pub const TF_TOPIC: &str = "/tf";
+
+/// Writes one run to an MCAP file.
+pub struct McapLog<W: Write + Seek> {
+    out: mcap::Writer<W>,
+    robot: String,
+    tf: u16,
+    pose: u16,
+    odometry: u16,
+    scans: Vec<(u16, usize)>,
+    path: u16,
+    sequence: u32,
+    buf: Vec<u8>,
+    poses: Vec<Pose>,
+}
+
+fn ns(t: f64) -> u64 {
+    (t.max(0.0) * 1e9).round() as u64
+}
+
+fn stamp(t: f64) -> Option<Timestamp> {
+    let n = ns(t);
+    Some(Timestamp::new(
+        u32::try_from(n / 1_000_000_000).unwrap_or(u32::MAX),
+        (n % 1_000_000_000) as u32,
+    ))
+}
+
+fn vec3(x: f64, y: f64, z: f64) -> Option<Vector3> {
+    Some(Vector3 { x, y, z })
+}
+
+fn yaw_quat(yaw: f64) -> Option<Quaternion> {
+    let (s, c) = (yaw / 2.0).sin_cos();
+    Some(Quaternion {
+        x: 0.0,
+        y: 0.0,
+        z: s,
+        w: c,
+    })
+}
+
+fn fg_pose(p: &Pose) -> FgPose {
+    FgPose {
+        position: vec3(p.x, p.y, p.z),
+        orientation: yaw_quat(p.yaw),
+    }
+}
+
+fn color(rgb: [u8; 3], a: f64) -> Option<Color> {
+    Some(Color {
+        r: f64::from(rgb[0]) / 255.0,
+        g: f64::from(rgb[1]) / 255.0,
+        b: f64::from(rgb[2]) / 255.0,
+        a,
+    })
+}
+
+fn mcap_err(e: impl std::fmt::Display) -> RecordError {
+    RecordError::Mcap(e.to_string())
+}
+
+impl<W: Write + Seek> McapLog<W> {
+    /// Starts a recording of `robot` in `world` and writes the static messages.
+    pub fn new(out: W, world: &World, robot: &Robot) -> Result<Self, RecordError> {
+        let opts = mcap::WriteOptions::new()
+            .compression(None)
+            .profile("")
+            .library(concat!("radarnav ", env!("CARGO_PKG_VERSION")));
+        let mut out = opts.create(out).map_err(mcap_err)?;
+        let name = robot.name.clone();
+        let mut channel = |topic: &str, schema: Option<foxglove::Schema>| {
+            let schema = schema.ok_or_else(|| mcap_err("schema missing"))?;
+            let id = out
+                .add_schema(&schema.name, &schema.encoding, &schema.data)
+                .map_err(mcap_err)?;
+            out.add_channel(id, topic, "protobuf", &BTreeMap::new())
+                .map_err(mcap_err)
+        };
+        let world_ch = channel(WORLD_TOPIC, SceneUpdate::get_schema())?;
+        let tf = channel(TF_TOPIC, FrameTransform::get_schema())?;
+        let body = channel(&format!("/{name}/body"), SceneUpdate::get_schema())?;
+        let pose = channel(&format!("/{name}/pose"), PoseInFrame::get_schema())?;
+        let odometry = channel(&format!("/{name}/odometry"), PoseInFrame::get_schema())?;
+        let mut scans = Vec::new();
+        for s in &robot.sensors {
+            let id = channel(&format!("/{name}/scan/{}", s.name), LaserScan::get_schema())?;
+            let plane = s
+                .config
+                .elevations
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                .map_or(0, |(i, _)| i);
+            scans.push((id, plane));
+        }
+        let path = channel(&format!("/{name}/path"), PosesInFrame::get_schema())?;
+        let mut log = Self {
+            out,
+            robot: name,
+            tf,
+            pose,
+            odometry,
+            scans,
+            path,
+            sequence: 0,
+            buf: Vec::new(),
+            poses: Vec::new(),
+        };
+        log.write(world_ch, 0.0, &world_scene(world))?;
+        log.write(body, 0.0, &body_scene(robot))?;
+        for s in &robot.sensors {
+            let m = &s.mount;
+            let msg = FrameTransform {
+                timestamp: stamp(0.0),
+                parent_frame_id: format!("{}/base_link", log.robot),
+                child_frame_id: format!("{}/{}", log.robot, s.name),
+                translation: vec3(m.x, m.y, m.z),
+                rotation: yaw_quat(m.yaw),
+            };
+            log.write(tf, 0.0, &msg)?;
+        }
+        Ok(log)
+    }
+
+    fn write<T: Encode>(&mut self, channel: u16, t: f64, msg: &T) -> Result<(), RecordError> {
+        self.buf.clear();
+        msg.encode(&mut self.buf)
+            .map_err(|_| mcap_err("protobuf encoding failed"))?;
+        self.sequence += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: ns(t),
+            publish_time: ns(t),
+        };
+        self.out
+            .write_to_known_channel(&header, &self.buf)
+            .map_err(mcap_err)
+    }
+
+    /// Logs a step: the transform, the true pose and the odometry.
+    pub fn step(&mut self, step: &Step) -> Result<(), RecordError> {
+        let t = step.time;
+        let p = step.truth;
+        let tf = FrameTransform {
+            timestamp: stamp(t),
+            parent_frame_id: "world".into(),
+            child_frame_id: format!("{}/base_link", self.robot),
+            translation: vec3(p.x, p.y, p.z),
+            rotation: yaw_quat(p.yaw),
+        };
+        self.write(self.tf, t, &tf)?;
+        for (ch, pose) in [(self.pose, &step.truth), (self.odometry, &step.odometry)] {
+            let msg = PoseInFrame {
+                timestamp: stamp(t),
+                frame_id: "world".into(),
+                pose: Some(fg_pose(pose)),
+            };
+            self.write(ch, t, &msg)?;
+        }
+        // The path keeps a pose every 0.1 m or 10° so it stays small on long runs.
+        let keep = self.poses.last().is_none_or(|q| {
+            (q.position() - p.position()).length() >= 0.1
+                || crate::pose::wrap_angle(q.yaw - p.yaw).abs() >= 10f64.to_radians()
+        });
+        if keep {
+            self.poses.push(p);
+        }
+        Ok(())
+    }
+
+    /// Logs a scan of sensor `sensor`.
+    pub fn scan(&mut self, sensor: usize, scan: &Scan) -> Result<(), RecordError> {
+        let (ch, plane) = self.scans[sensor];
+        let rows = plane * scan.azimuths..(plane + 1) * scan.azimuths;
+        let msg = LaserScan {
+            timestamp: stamp(scan.stamp),
+            frame_id: "world".into(),
+            pose: Some(fg_pose(&scan.pose)),
+            start_angle: scan.angle_min,
+            end_angle: scan.angle_min + (scan.azimuths.max(1) - 1) as f64 * scan.angle_increment,
+            ranges: scan.ranges[rows.clone()]
+                .iter()
+                .map(|&r| f64::from(r))
+                .collect(),
+            intensities: scan.hits[rows]
+                .iter()
+                .map(|h| match h {
+                    HitKind::None => 0.0,
+                    HitKind::Exhausted => 1.0,
+                    HitKind::Solid => 2.0,
+                })
+                .collect(),
+        };
+        self.write(ch, scan.stamp, &msg)
+    }
+
+    /// Logs the path and closes the file; returns the sink.
+    pub fn finish(mut self, end_time: f64, last: &Pose) -> Result<W, RecordError> {
+        self.poses.push(*last);
+        let msg = PosesInFrame {
+            timestamp: stamp(end_time),
+            frame_id: "world".into(),
+            poses: self.poses.iter().map(fg_pose).collect(),
+        };
+        self.write(self.path, end_time, &msg)?;
+        self.out.finish().map_err(mcap_err)?;
+        Ok(self.out.into_inner())
+    }
+}
+
+fn world_scene(world: &World) -> SceneUpdate {
+    let entities = world
+        .objects()
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let m = world.materials().get(o.material);
+            let alpha = if m.traversable {
+                0.25
+            } else if m.radar_penetrable() {
+                0.6
+            } else {
+                1.0
+            };
+            let c = color(m.color, alpha);
+            let mut e = SceneEntity {
+                timestamp: stamp(0.0),
+                frame_id: "world".into(),
+                id: o.name.clone().unwrap_or_else(|| format!("object-{i}")),
+                metadata: vec![foxglove::schemas::KeyValuePair {
+                    key: "material".into(),
+                    value: m.name.clone(),
+                }],
+                ..Default::default()
+            };
+            let cube = |b: &crate::world::OrientedBox| CubePrimitive {
+                pose: Some(fg_pose(&Pose::new(
+                    b.center.x, b.center.y, b.center.z, b.yaw,
+                ))),
+                size: vec3(2.0 * b.half.x, 2.0 * b.half.y, 2.0 * b.half.z),
+                color: c,
+            };
+            match &o.shape {
+                Shape::Sphere { center, radius } => e.spheres.push(SpherePrimitive {
+                    pose: Some(fg_pose(&Pose::new(center.x, center.y, center.z, 0.0))),
+                    size: vec3(2.0 * radius, 2.0 * radius, 2.0 * radius),
+                    color: c,
+                }),
+                Shape::Box(b) => e.cubes.push(cube(b)),
+                Shape::Cylinder {
+                    center,
+                    radius,
+                    half_height,
+                } => e.cylinders.push(CylinderPrimitive {
+                    pose: Some(fg_pose(&Pose::new(center.x, center.y, center.z, 0.0))),
+                    size: vec3(2.0 * radius, 2.0 * radius, 2.0 * half_height),
+                    bottom_scale: 1.0,
+                    top_scale: 1.0,
+                    color: c,
+                }),
+                Shape::Wall { segments, .. } => e.cubes.extend(segments.iter().map(cube)),
+                Shape::Prism {
+                    polygon,
+                    z_min,
+                    z_max,
+                } => {
+                    // Outline: bottom ring, top ring and the vertical edges, as a line list.
+                    let n = polygon.len();
+                    let mut points = Vec::with_capacity(6 * n);
+                    for i in 0..n {
+                        let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+                        for (p, q) in [
+                            (a, b, *z_min, *z_min),
+                            (a, b, *z_max, *z_max),
+                            (a, a, *z_min, *z_max),
+                        ]
+                        .map(|(p, q, z0, z1)| (p.extend(z0), q.extend(z1)))
+                        {
+                            points.push(Point3 {
+                                x: p.x,
+                                y: p.y,
+                                z: p.z,
+                            });
+                            points.push(Point3 {
+                                x: q.x,
+                                y: q.y,
+                                z: q.z,
+                            });
+                        }
+                    }
+                    e.lines.push(LinePrimitive {
+                        r#type: line_primitive::Type::LineList as i32,
+                        pose: Some(fg_pose(&Pose::default())),
+                        thickness: 0.03,
+                        points,
+                        color: c,
+                        ..Default::default()
+                    });
+                }
+            }
+            e
+        })
+        .collect();
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities,
+    }
+}
+
+fn body_scene(robot: &Robot) -> SceneUpdate {
+    let v = robot.vehicle;
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities: vec![SceneEntity {
+            timestamp: stamp(0.0),
+            frame_id: format!("{}/base_link", robot.name),
+            id: robot.name.clone(),
+            frame_locked: true,
+            cubes: vec![CubePrimitive {
+                pose: Some(fg_pose(&Pose::new(0.0, 0.0, v.height / 2.0, 0.0))),
+                size: vec3(v.length, v.width, v.height),
+                color: color([30, 60, 200], 0.9),
+            }],
+            ..Default::default()
+        }],
+    }
+}

@@ -1,0 +1,290 @@
+//! Recording a run to a directory (DESIGN §8): `trajectory.csv`, one binary scan log per
+//! sensor under `scans/`, `summary.json`, `path.png` and `run.mcap`.
+//!
+//! `trajectory.csv` has one row per step:
+//! `time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped` — the true
+//! pose and the odometry estimate at the start of the step, the command in force during it
+//! (after the vehicle's limits; `left`/`right` are the track speeds) and whether its move was
+//! refused by a collision (0/1).
+
+#[cfg(feature = "mcap")]
+pub mod mcap_log;
+pub mod scan_log;
+
+pub use scan_log::{ScanLogError, ScanLogHeader, ScanLogWriter, read_scan_log};
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use glam::DVec2;
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::pose::Pose;
+use crate::render::{Figure, RenderError, save_png};
+use crate::scenario::{Robot, Scenario};
+use crate::sensor::Scan;
+use crate::sim::{Observer, RunSummary, Step};
+use crate::world::World;
+
+/// A recording that failed.
+#[derive(Debug, Error)]
+pub enum RecordError {
+    /// A file could not be created or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The MCAP writer failed.
+    #[error("MCAP: {0}")]
+    Mcap(String),
+    /// The path figure failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+/// What to record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RecordOptions {
+    /// Write `run.mcap` (needs the `mcap` feature).
+    pub mcap: bool,
+    /// Write the binary scan logs.
+    pub scans: bool,
+    /// Longer side of `path.png`, pixels.
+    pub pixels: u32,
+}
+
+impl Default for RecordOptions {
+    fn default() -> Self {
+        Self {
+            mcap: cfg!(feature = "mcap"),
+            scans: true,
+            pixels: 900,
+        }
+    }
+}
+
+/// The file names inside the output directory.
+pub mod files {
+    /// Per-step log.
+    pub const TRAJECTORY: &str = "trajectory.csv";
+    /// Run summary.
+    pub const SUMMARY: &str = "summary.json";
+    /// Top-down figure of the driven path.
+    pub const PATH_PNG: &str = "path.png";
+    /// The MCAP recording.
+    pub const MCAP: &str = "run.mcap";
+    /// Directory of the scan logs, one `<sensor>.rnscan` each.
+    pub const SCANS: &str = "scans";
+}
+
+type Out = BufWriter<File>;
+
+/// Records a run: pass it to [`crate::sim::Simulation::run`], then call [`Recorder::finish`].
+pub struct Recorder {
+    dir: PathBuf,
+    trajectory: Out,
+    scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
+    #[cfg(feature = "mcap")]
+    mcap: Option<mcap_log::McapLog<Out>>,
+    truth: Vec<DVec2>,
+    odometry: Vec<DVec2>,
+    bumps: Vec<DVec2>,
+    vehicle_tracks: f64,
+    written: Vec<PathBuf>,
+}
+
+fn create(path: &Path) -> Result<Out, RecordError> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|source| RecordError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
+
+fn io_at(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
+    move |source| RecordError::Io {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+impl Recorder {
+    /// Creates `dir` (and `dir/scans`) and opens every output file.
+    pub fn create(
+        dir: &Path,
+        world: &World,
+        robot: &Robot,
+        options: RecordOptions,
+    ) -> Result<Self, RecordError> {
+        std::fs::create_dir_all(dir).map_err(io_at(dir))?;
+        let mut written = Vec::new();
+        let tpath = dir.join(files::TRAJECTORY);
+        let mut trajectory = create(&tpath)?;
+        writeln!(
+            trajectory,
+            "time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped"
+        )
+        .map_err(io_at(&tpath))?;
+        written.push(tpath);
+        let mut scan_logs = Vec::new();
+        if options.scans && !robot.sensors.is_empty() {
+            let sdir = dir.join(files::SCANS);
+            std::fs::create_dir_all(&sdir).map_err(io_at(&sdir))?;
+            for s in &robot.sensors {
+                let path = sdir.join(format!("{}.rnscan", s.name));
+                let w =
+                    ScanLogWriter::new(create(&path)?, &ScanLogHeader::new(s, world.materials()))
+                        .map_err(io_at(&path))?;
+                scan_logs.push((path, w));
+            }
+        }
+        #[cfg(feature = "mcap")]
+        let mcap = if options.mcap {
+            let path = dir.join(files::MCAP);
+            Some(mcap_log::McapLog::new(create(&path)?, world, robot)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            dir: dir.to_owned(),
+            trajectory,
+            scan_logs,
+            #[cfg(feature = "mcap")]
+            mcap,
+            truth: Vec::new(),
+            odometry: Vec::new(),
+            bumps: Vec::new(),
+            vehicle_tracks: robot.vehicle.wheel_separation,
+            written,
+        })
+    }
+
+    /// Writes the summary and the path figure, closes every file and returns their paths.
+    pub fn finish(
+        mut self,
+        scenario: &Scenario,
+        robot: &Robot,
+        summary: &RunSummary,
+        pixels: u32,
+    ) -> Result<Vec<PathBuf>, RecordError> {
+        let tpath = self.dir.join(files::TRAJECTORY);
+        self.trajectory.flush().map_err(io_at(&tpath))?;
+        for (path, log) in self.scan_logs {
+            log.finish().map_err(io_at(&path))?;
+            self.written.push(path);
+        }
+        #[cfg(feature = "mcap")]
+        if let Some(m) = self.mcap.take() {
+            let path = self.dir.join(files::MCAP);
+            m.finish(summary.duration, &summary.final_pose)?
+                .flush()
+                .map_err(io_at(&path))?;
+            self.written.push(path);
+        }
+        // The last pose is not in the step log (steps log their start).
+        self.truth
+            .push(DVec2::new(summary.final_pose.x, summary.final_pose.y));
+        self.odometry.push(DVec2::new(
+            summary.final_odometry.x,
+            summary.final_odometry.y,
+        ));
+        let mut fig = Figure::of_world(&scenario.world, None, pixels)?;
+        fig.draw_path(&self.odometry, [150, 150, 150], 2.0, "path: odometry");
+        fig.draw_path(&self.truth, [20, 120, 40], 3.0, "path: true");
+        fig.draw_crosses(&self.bumps, [200, 0, 160], "bump");
+        fig.draw_robot(&robot.start, robot.vehicle);
+        fig.draw_robot(&summary.final_pose, robot.vehicle);
+        let png = self.dir.join(files::PATH_PNG);
+        save_png(
+            &fig.finish(&format!(
+                "{} - {} drove {:.1} m in {:.1} s, {} bumps",
+                scenario.name, robot.name, summary.distance, summary.duration, summary.bumps
+            )),
+            &png,
+        )?;
+        self.written.push(png);
+        let report = Report {
+            scenario: &scenario.name,
+            mission: scenario.mission.as_ref().map(|m| m.kind_name()),
+            summary,
+        };
+        let spath = self.dir.join(files::SUMMARY);
+        let mut json = serde_json::to_string_pretty(&report)
+            .map_err(|e| io_at(&spath)(std::io::Error::other(e)))?;
+        json.push('\n');
+        std::fs::write(&spath, json).map_err(io_at(&spath))?;
+        self.written.push(spath);
+        Ok(self.written)
+    }
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    scenario: &'a str,
+    mission: Option<&'a str>,
+    #[serde(flatten)]
+    summary: &'a RunSummary,
+}
+
+impl Observer for Recorder {
+    type Error = RecordError;
+
+    fn on_scan(&mut self, sensor: usize, scan: &Scan) -> Result<(), RecordError> {
+        if let Some((path, log)) = self.scan_logs.get_mut(sensor) {
+            log.write(scan).map_err(io_at(path))?;
+        }
+        #[cfg(feature = "mcap")]
+        if let Some(m) = &mut self.mcap {
+            m.scan(sensor, scan)?;
+        }
+        Ok(())
+    }
+
+    fn on_step(&mut self, s: &Step) -> Result<(), RecordError> {
+        let (t, o) = (&s.truth, &s.odometry);
+        let half = s.command.omega * self.vehicle_tracks / 2.0;
+        let row = format!(
+            "{:.3},{:.5},{:.5},{:.4},{:.5},{:.5},{:.4},{:.4},{:.3},{:.4},{:.4},{}\n",
+            s.time,
+            t.x,
+            t.y,
+            t.yaw.to_degrees(),
+            o.x,
+            o.y,
+            o.yaw.to_degrees(),
+            s.command.v,
+            s.command.omega.to_degrees(),
+            s.command.v - half,
+            s.command.v + half,
+            u8::from(s.bumped)
+        );
+        self.trajectory
+            .write_all(row.as_bytes())
+            .map_err(|source| RecordError::Io {
+                path: self.dir.join(files::TRAJECTORY),
+                source,
+            })?;
+        #[cfg(feature = "mcap")]
+        if let Some(m) = &mut self.mcap {
+            m.step(s)?;
+        }
+        let keep = |v: &mut Vec<DVec2>, p: &Pose| {
+            let q = DVec2::new(p.x, p.y);
+            if v.last().is_none_or(|l| l.distance_squared(q) >= 1e-4) {
+                v.push(q);
+            }
+        };
+        keep(&mut self.truth, t);
+        keep(&mut self.odometry, o);
+        if s.bumped && self.bumps.len() < crate::sim::MAX_BUMP_EVENTS {
+            self.bumps.push(DVec2::new(t.x, t.y));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,402 @@
+//! The simulation loop (DESIGN §4): fixed steps, sensors at their own rates, a controller at
+//! its own rate, collisions refused, odometry beside the truth.
+//!
+//! One step from time `t` to `t + dt`:
+//! 1. sensors due at `t` scan from the pose at `t`;
+//! 2. the controller runs if it is due, seeing the latest scans and the odometry;
+//! 3. the command is limited to the vehicle and the move is checked for collisions along its
+//!    arc; a move that would collide is refused whole (the robot stays; the bump is counted);
+//! 4. sensors due strictly inside the step scan from the exact pose on the arc at their time;
+//! 5. the robot and its odometry move.
+//!
+//! Scan `k` of a sensor with rate `r` is taken at exactly `k / r` seconds, whatever `dt` is.
+//! Every random draw comes from ChaCha8 streams of the run's seed: stream 0 for the odometry,
+//! stream `1 + i` for sensor `i`, so the same scenario and seed give the same run.
+
+mod summary;
+
+pub use summary::{BumpEvent, RunOutcome, RunSummary, SensorCount};
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use thiserror::Error;
+
+use crate::pose::Pose;
+use crate::scenario::{MountedSensor, Robot, Scenario};
+use crate::sensor::{Scan, Tracer};
+use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
+use crate::world::World;
+
+/// What a controller sees when it is called.
+#[derive(Clone, Copy, Debug)]
+pub struct ControlInput<'a> {
+    /// Simulation time, s.
+    pub time: f64,
+    /// The odometry estimate (never the true pose).
+    pub odometry: &'a Pose,
+    /// Whether the last move was refused by a collision.
+    pub bumped: bool,
+    /// The latest scan of each sensor, in the robot's sensor order (`None` before the first).
+    pub scans: &'a [Option<Scan>],
+    /// The robot's sensors (names, configs, mounts), same order.
+    pub sensors: &'a [MountedSensor],
+    /// The vehicle being driven.
+    pub vehicle: &'static VehicleSpec,
+}
+
+/// A controller's answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Decision {
+    /// Drive with this command until the next call.
+    Drive(DriveCommand),
+    /// The mission is over; the run ends here.
+    Finished,
+}
+
+/// Something that drives the robot: called at [`Controller::rate_hz`] with the latest data.
+pub trait Controller {
+    /// Calls per second.
+    fn rate_hz(&self) -> f64;
+    /// The command for the coming period.
+    fn update(&mut self, input: &ControlInput<'_>) -> Decision;
+}
+
+/// One simulation step as logged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    /// Time at the start of the step, s.
+    pub time: f64,
+    /// True pose at `time`.
+    pub truth: Pose,
+    /// Odometry estimate at `time`.
+    pub odometry: Pose,
+    /// The command in force during the step, after the vehicle's limits.
+    pub command: Twist,
+    /// Whether the step's move was refused by a collision.
+    pub bumped: bool,
+}
+
+/// Receives what happens in a run, in time order (a recorder, a progress bar, a test).
+pub trait Observer {
+    /// Error that ends the run.
+    type Error;
+    /// A scan was taken by sensor `sensor` (index into the robot's sensors).
+    fn on_scan(&mut self, _sensor: usize, _scan: &Scan) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    /// A step was taken.
+    fn on_step(&mut self, _step: &Step) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// An observer that ignores everything.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    type Error = std::convert::Infallible;
+}
+
+/// A run that cannot start.
+#[derive(Debug, Error, PartialEq)]
+pub enum SimError {
+    /// The robot's start pose overlaps an object it cannot drive through.
+    #[error("robot `{robot}` starts inside `{object}`, which it cannot drive through")]
+    StartBlocked {
+        /// Robot name.
+        robot: String,
+        /// Object name (or `object #i`).
+        object: String,
+    },
+    /// Bad run settings.
+    #[error("{0}")]
+    Settings(String),
+}
+
+/// Timing and seed of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSettings {
+    /// Step, s.
+    pub dt: f64,
+    /// Longest run, s.
+    pub duration: f64,
+    /// Seed of every random draw.
+    pub seed: u64,
+}
+
+impl RunSettings {
+    /// The scenario's `[sim]` settings.
+    pub fn of(scenario: &Scenario) -> Self {
+        Self {
+            dt: scenario.sim.dt,
+            duration: scenario.sim.duration,
+            seed: scenario.sim.seed,
+        }
+    }
+}
+
+/// Longest distance (m) and turn (rad) between two collision checks within a step.
+const CHECK_STEP: (f64, f64) = (0.02, 0.035);
+/// Slack for comparing event times on the step grid, s.
+const TIME_EPS: f64 = 1e-9;
+
+/// A run in progress.
+pub struct Simulation<'a> {
+    world: &'a World,
+    robot: &'a Robot,
+    controller: Box<dyn Controller + 'a>,
+    settings: RunSettings,
+    ticks: u64,
+    tick: u64,
+    truth: Pose,
+    odometry: Odometry,
+    odo_rng: ChaCha8Rng,
+    sensor_rngs: Vec<ChaCha8Rng>,
+    tracer: Tracer,
+    next_scan: Vec<u64>,
+    next_control: u64,
+    latest: Vec<Option<Scan>>,
+    command: Twist,
+    bumped: bool,
+    finished: bool,
+    distance: f64,
+    bumps: Vec<BumpEvent>,
+    bump_count: usize,
+}
+
+/// Bumps kept with time and object in the summary; later ones are only counted.
+pub const MAX_BUMP_EVENTS: usize = 1000;
+
+impl<'a> Simulation<'a> {
+    /// A run of `robot` in `world` driven by `controller`.
+    pub fn new(
+        world: &'a World,
+        robot: &'a Robot,
+        controller: Box<dyn Controller + 'a>,
+        settings: RunSettings,
+    ) -> Result<Self, SimError> {
+        if !(settings.dt > 0.0 && settings.dt.is_finite()) {
+            return Err(SimError::Settings(format!(
+                "dt must be a finite number > 0, found {}",
+                settings.dt
+            )));
+        }
+        if !(settings.duration >= 0.0 && settings.duration.is_finite()) {
+            return Err(SimError::Settings(format!(
+                "duration must be a finite number >= 0, found {}",
+                settings.duration
+            )));
+        }
+        let rate = controller.rate_hz();
+        if !(rate > 0.0 && rate.is_finite()) {
+            return Err(SimError::Settings(format!(
+                "controller rate must be a finite number > 0, found {rate}"
+            )));
+        }
+        let start = Pose {
+            z: 0.0,
+            ..robot.start
+        };
+        if let Some(i) = world.blocking_object(&robot.vehicle.body(&start)) {
+            return Err(SimError::StartBlocked {
+                robot: robot.name.clone(),
+                object: object_name(world, i),
+            });
+        }
+        let stream = |k: u64| {
+            let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+            rng.set_stream(k);
+            rng
+        };
+        let n = robot.sensors.len();
+        Ok(Self {
+            world,
+            robot,
+            controller,
+            settings,
+            ticks: (settings.duration / settings.dt).round() as u64,
+            tick: 0,
+            truth: start,
+            odometry: Odometry::new(start, robot.odometry),
+            odo_rng: stream(0),
+            sensor_rngs: (1..=n as u64).map(stream).collect(),
+            tracer: Tracer::default(),
+            next_scan: vec![0; n],
+            next_control: 0,
+            latest: vec![None; n],
+            command: Twist::default(),
+            bumped: false,
+            finished: false,
+            distance: 0.0,
+            bumps: Vec::new(),
+            bump_count: 0,
+        })
+    }
+
+    /// Simulation time now, s.
+    pub fn time(&self) -> f64 {
+        self.tick as f64 * self.settings.dt
+    }
+
+    /// Steps in the whole run (at most).
+    pub fn total_steps(&self) -> u64 {
+        self.ticks
+    }
+
+    /// Whether the run is over (time is up or the mission finished).
+    pub fn done(&self) -> bool {
+        self.finished || self.tick >= self.ticks
+    }
+
+    /// True pose now.
+    pub fn truth(&self) -> Pose {
+        self.truth
+    }
+
+    /// Odometry now.
+    pub fn odometry(&self) -> &Odometry {
+        &self.odometry
+    }
+
+    /// Runs to the end.
+    pub fn run<O: Observer>(&mut self, observer: &mut O) -> Result<RunSummary, O::Error> {
+        while self.step(observer)? {}
+        Ok(self.summary())
+    }
+
+    /// Takes one step; `false` once the run is over.
+    pub fn step<O: Observer>(&mut self, observer: &mut O) -> Result<bool, O::Error> {
+        if self.done() {
+            return Ok(false);
+        }
+        let t = self.time();
+        let dt = self.settings.dt;
+        let start = self.truth;
+        // 1. Scans due now see the pose at the start of the step.
+        self.fire_sensors(t + TIME_EPS, |_| start, observer)?;
+        // 2. Controller.
+        let rate = self.controller.rate_hz();
+        if self.next_control as f64 / rate <= t + TIME_EPS {
+            let input = ControlInput {
+                time: t,
+                odometry: &self.odometry.pose,
+                bumped: self.bumped,
+                scans: &self.latest,
+                sensors: &self.robot.sensors,
+                vehicle: self.robot.vehicle,
+            };
+            match self.controller.update(&input) {
+                Decision::Drive(cmd) => self.command = self.robot.vehicle.limit(cmd),
+                Decision::Finished => {
+                    self.finished = true;
+                    self.command = Twist::default();
+                    return Ok(false);
+                }
+            }
+            while self.next_control as f64 / rate <= t + TIME_EPS {
+                self.next_control += 1;
+            }
+        }
+        // 3. Collision check along the arc.
+        let cmd = self.command;
+        let blocked = self.first_block(&start, cmd, dt);
+        self.bumped = blocked.is_some();
+        if blocked.is_some() {
+            self.bump_count += 1;
+        }
+        if let Some(object) = blocked.filter(|_| self.bumps.len() < MAX_BUMP_EVENTS) {
+            self.bumps.push(BumpEvent {
+                time: t,
+                object: object_name(self.world, object),
+            });
+        }
+        let executed = if self.bumped { Twist::default() } else { cmd };
+        observer.on_step(&Step {
+            time: t,
+            truth: start,
+            odometry: self.odometry.pose,
+            command: cmd,
+            bumped: self.bumped,
+        })?;
+        // 4. Scans inside the step, on the arc.
+        self.fire_sensors(
+            t + dt - TIME_EPS,
+            |s| integrate(&start, executed, (s - t).max(0.0)),
+            observer,
+        )?;
+        // 5. Move.
+        self.truth = integrate(&start, executed, dt);
+        self.distance += executed.v.abs() * dt;
+        self.odometry
+            .update(self.robot.vehicle, executed, dt, &mut self.odo_rng);
+        self.tick += 1;
+        Ok(!self.done())
+    }
+
+    /// Takes every scan not yet taken whose time is at most `until`, in time order across
+    /// sensors (ties: sensor order).
+    fn fire_sensors<O: Observer>(
+        &mut self,
+        until: f64,
+        pose_at: impl Fn(f64) -> Pose,
+        observer: &mut O,
+    ) -> Result<(), O::Error> {
+        loop {
+            // The earliest due scan of any sensor; ties go to the lower index.
+            let due = self
+                .robot
+                .sensors
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (i, self.next_scan[i] as f64 / s.config.rate_hz))
+                .filter(|&(_, when)| when <= until)
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            let Some((i, when)) = due else {
+                return Ok(());
+            };
+            let sensor = &self.robot.sensors[i];
+            let sensor_pose = pose_at(when).compose(&sensor.mount);
+            let scan = sensor.config.scan(
+                self.world,
+                &sensor_pose,
+                when,
+                &mut self.sensor_rngs[i],
+                &mut self.tracer,
+            );
+            self.next_scan[i] += 1;
+            observer.on_scan(i, &scan)?;
+            self.latest[i] = Some(scan);
+        }
+    }
+
+    /// The first object met when driving `cmd` for `dt` from `start`, checked every few
+    /// centimetres and degrees of the arc.
+    fn first_block(&self, start: &Pose, cmd: Twist, dt: f64) -> Option<usize> {
+        if cmd == Twist::default() {
+            return None;
+        }
+        let n = ((cmd.v.abs() * dt / CHECK_STEP.0).max(cmd.omega.abs() * dt / CHECK_STEP.1))
+            .ceil()
+            .max(1.0) as u32;
+        (1..=n).find_map(|k| {
+            let p = integrate(start, cmd, dt * f64::from(k) / f64::from(n));
+            self.world.blocking_object(&self.robot.vehicle.body(&p))
+        })
+    }
+
+    /// What the run did so far.
+    pub fn summary(&self) -> RunSummary {
+        RunSummary::new(self)
+    }
+}
+
+fn object_name(world: &World, i: usize) -> String {
+    world.objects()[i]
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("object #{i}"))
+}
+
+#[cfg(test)]
+mod tests;

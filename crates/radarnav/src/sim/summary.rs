@@ -1,0 +1,115 @@
+//! What a run did, as written to `summary.json`.
+
+use serde::Serialize;
+
+use super::Simulation;
+use crate::pose::{Pose, wrap_angle};
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunOutcome {
+    /// The controller said the mission was over.
+    Completed,
+    /// Time ran out first.
+    Timeout,
+}
+
+/// A refused move.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BumpEvent {
+    /// Time of the step, s.
+    pub time: f64,
+    /// What the robot would have hit.
+    pub object: String,
+}
+
+/// Scans taken by one sensor.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SensorCount {
+    /// Sensor name.
+    pub name: String,
+    /// Preset it was built from.
+    pub preset: Option<String>,
+    /// Configured rate, Hz.
+    pub rate_hz: f64,
+    /// Scans taken.
+    pub scans: u64,
+}
+
+/// Summary of a run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunSummary {
+    /// Robot name.
+    pub robot: String,
+    /// Vehicle preset.
+    pub vehicle: String,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Step, s.
+    pub dt: f64,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// How it ended.
+    pub outcome: RunOutcome,
+    /// Distance driven (true), m.
+    pub distance: f64,
+    /// Distance according to the odometry, m.
+    pub odometry_distance: f64,
+    /// True pose at the end.
+    pub final_pose: Pose,
+    /// Odometry estimate at the end.
+    pub final_odometry: Pose,
+    /// Distance between the two, m.
+    pub odometry_error: f64,
+    /// Heading difference between the two, degrees.
+    pub odometry_yaw_error_deg: f64,
+    /// Number of refused moves.
+    pub bumps: usize,
+    /// Refused moves: the first [`super::MAX_BUMP_EVENTS`].
+    pub bump_events: Vec<BumpEvent>,
+    /// Scans per sensor.
+    pub sensors: Vec<SensorCount>,
+}
+
+impl RunSummary {
+    pub(super) fn new(sim: &Simulation<'_>) -> Self {
+        let truth = sim.truth;
+        let odo = sim.odometry.pose;
+        Self {
+            robot: sim.robot.name.clone(),
+            vehicle: sim.robot.vehicle.name.to_owned(),
+            seed: sim.settings.seed,
+            dt: sim.settings.dt,
+            duration: sim.time(),
+            steps: sim.tick,
+            outcome: if sim.finished {
+                RunOutcome::Completed
+            } else {
+                RunOutcome::Timeout
+            },
+            distance: sim.distance,
+            odometry_distance: sim.odometry.distance,
+            final_pose: truth,
+            final_odometry: odo,
+            odometry_error: (truth.position() - odo.position()).length(),
+            odometry_yaw_error_deg: wrap_angle(odo.yaw - truth.yaw).to_degrees(),
+            bumps: sim.bump_count,
+            bump_events: sim.bumps.clone(),
+            sensors: sim
+                .robot
+                .sensors
+                .iter()
+                .zip(&sim.next_scan)
+                .map(|(s, &n)| SensorCount {
+                    name: s.name.clone(),
+                    preset: s.config.preset.clone(),
+                    rate_hz: s.config.rate_hz,
+                    scans: n,
+                })
+                .collect(),
+        }
+    }
+}

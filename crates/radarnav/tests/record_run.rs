@@ -1,0 +1,149 @@
+//! A whole recorded run of the foliage-wall mission: every output file, read back.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use foxglove::Decode;
+use foxglove::schemas::{LaserScan, SceneUpdate};
+use radarnav::Scenario;
+use radarnav::record::{RecordOptions, Recorder, files, read_scan_log};
+use radarnav::sim::{RunOutcome, RunSettings, RunSummary, Simulation};
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// Runs the built-in foliage-wall mission for `duration` seconds into `dir`.
+fn record(dir: &Path, duration: f64) -> RunSummary {
+    let s = Scenario::builtin("foliage-wall").unwrap();
+    let robot = &s.robots[0];
+    let controller = s.mission.as_ref().unwrap().controller().unwrap();
+    let settings = RunSettings {
+        duration,
+        ..RunSettings::of(&s)
+    };
+    let mut sim = Simulation::new(&s.world, robot, controller, settings).unwrap();
+    let mut rec = Recorder::create(dir, &s.world, robot, RecordOptions::default()).unwrap();
+    let summary = sim.run(&mut rec).unwrap();
+    rec.finish(&s, robot, &summary, 400).unwrap();
+    summary
+}
+
+#[test]
+fn mcap_reads_back_with_the_expected_channels_and_counts() {
+    let dir = tmp("record-mcap");
+    let summary = record(&dir, 3.0);
+    assert_eq!(summary.outcome, RunOutcome::Timeout);
+    assert_eq!(summary.steps, 60);
+    let bytes = std::fs::read(dir.join(files::MCAP)).unwrap();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut schemas: BTreeMap<String, String> = BTreeMap::new();
+    let mut last_scan = None;
+    let mut world = None;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let topic = m.channel.topic.clone();
+        *counts.entry(topic.clone()).or_default() += 1;
+        let schema = m.channel.schema.as_ref().unwrap();
+        assert_eq!(schema.encoding, "protobuf");
+        assert_eq!(m.channel.message_encoding, "protobuf");
+        schemas.insert(topic.clone(), schema.name.clone());
+        if topic == "/p3at/scan/laser" {
+            last_scan = Some((m.log_time, LaserScan::decode(m.data.as_ref()).unwrap()));
+        }
+        if topic == "/world" {
+            world = Some(SceneUpdate::decode(m.data.as_ref()).unwrap());
+        }
+    }
+    let expect = |topic: &str, schema: &str, n: usize| {
+        assert_eq!(
+            schemas.get(topic).map(String::as_str),
+            Some(schema),
+            "{topic}"
+        );
+        assert_eq!(counts.get(topic).copied(), Some(n), "{topic}");
+    };
+    expect("/world", "foxglove.SceneUpdate", 1);
+    expect("/p3at/body", "foxglove.SceneUpdate", 1);
+    // 60 steps of the robot plus the two sensor mounts at t = 0.
+    expect("/tf", "foxglove.FrameTransform", 60 + 2);
+    expect("/p3at/pose", "foxglove.PoseInFrame", 60);
+    expect("/p3at/odometry", "foxglove.PoseInFrame", 60);
+    // 3 s at 4 Hz and at 40 Hz.
+    expect("/p3at/scan/radar", "foxglove.LaserScan", 12);
+    expect("/p3at/scan/laser", "foxglove.LaserScan", 120);
+    expect("/p3at/path", "foxglove.PosesInFrame", 1);
+    assert_eq!(counts.len(), 8);
+    // The last laser scan: 1081 ranges over 270°, stamped 119/40 s.
+    let (t, scan) = last_scan.unwrap();
+    assert_eq!(t, 2_975_000_000);
+    assert_eq!(scan.ranges.len(), 1081);
+    assert!((scan.end_angle - scan.start_angle - 270f64.to_radians()).abs() < 1e-9);
+    assert!(scan.ranges.iter().any(|r| r.is_finite()));
+    let world = world.unwrap();
+    assert_eq!(world.entities.len(), 13);
+    assert_eq!(world.entities[1].spheres.len(), 1);
+}
+
+#[test]
+fn scan_logs_trajectory_and_summary_read_back() {
+    let dir = tmp("record-files");
+    let summary = record(&dir, 2.0);
+    let (header, scans) =
+        read_scan_log(&std::fs::read(dir.join("scans/radar.rnscan")).unwrap()).unwrap();
+    assert_eq!(header.sensor, "radar");
+    assert_eq!(header.azimuths, 360);
+    assert_eq!(scans.len(), 8);
+    assert_eq!(scans[3].stamp, 0.75);
+    // The first scan is taken at the start pose, sensor 0.4 m up.
+    assert_eq!(
+        (scans[0].pose.x, scans[0].pose.y, scans[0].pose.z),
+        (3.0, 4.0, 0.4)
+    );
+    assert!(scans.iter().all(|s| s.len() == 360));
+    let (lh, laser) =
+        read_scan_log(&std::fs::read(dir.join("scans/laser.rnscan")).unwrap()).unwrap();
+    assert_eq!((lh.azimuths, laser.len()), (1081, 80));
+
+    let csv = std::fs::read_to_string(dir.join(files::TRAJECTORY)).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 40);
+    assert!(rows.iter().all(|r| r.len() == 12 && r[11] == 0.0));
+    // left/right are the twist's track speeds.
+    for r in &rows {
+        let half = r[8].to_radians() * 0.36 / 2.0;
+        assert!((r[9] - (r[7] - half)).abs() < 2e-4 && (r[10] - (r[7] + half)).abs() < 2e-4);
+    }
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(files::SUMMARY)).unwrap()).unwrap();
+    assert_eq!(json["scenario"], "foliage-wall");
+    assert_eq!(json["mission"], "waypoints");
+    assert_eq!(json["bumps"], 0);
+    assert_eq!(json["sensors"][1]["scans"], 80);
+    assert!((json["distance"].as_f64().unwrap() - summary.distance).abs() < 1e-12);
+    let png = std::fs::read(dir.join(files::PATH_PNG)).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+}
+
+#[test]
+fn truncated_scan_log_is_an_error_not_a_panic() {
+    let dir = tmp("record-truncated");
+    record(&dir, 0.5);
+    let bytes = std::fs::read(dir.join("scans/radar.rnscan")).unwrap();
+    let e = read_scan_log(&bytes[..bytes.len() - 3]).unwrap_err();
+    assert!(e.to_string().starts_with("truncated"), "{e}");
+    assert_eq!(
+        read_scan_log(b"not a log at all").unwrap_err().to_string(),
+        "not a radarnav scan log (bad magic or version)"
+    );
+}
