@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use foxglove::Decode;
-use foxglove::schemas::{LaserScan, SceneUpdate};
+use foxglove::schemas::{LaserScan, PosesInFrame, SceneUpdate};
 use radarnav::Scenario;
 use radarnav::record::{RecordOptions, Recorder, files, read_scan_log};
 use radarnav::sim::{RunOutcome, RunSettings, RunSummary, Simulation};
@@ -42,6 +42,7 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     let mut schemas: BTreeMap<String, String> = BTreeMap::new();
     let mut last_scan = None;
     let mut world = None;
+    let mut path = None;
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         let topic = m.channel.topic.clone();
@@ -52,6 +53,9 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
         schemas.insert(topic.clone(), schema.name.clone());
         if topic == "/p3at/scan/laser" {
             last_scan = Some((m.log_time, LaserScan::decode(m.data.as_ref()).unwrap()));
+        }
+        if topic == "/p3at/path" {
+            path = Some(PosesInFrame::decode(m.data.as_ref()).unwrap());
         }
         if topic == "/world" {
             world = Some(SceneUpdate::decode(m.data.as_ref()).unwrap());
@@ -82,6 +86,11 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     assert_eq!(scan.ranges.len(), 1081);
     assert!((scan.end_angle - scan.start_angle - 270f64.to_radians()).abs() < 1e-9);
     assert!(scan.ranges.iter().any(|r| r.is_finite()));
+    // The path ends at the final pose, after 3 s at up to 0.5 m/s.
+    let path = path.unwrap();
+    let end = path.poses.last().unwrap().position.unwrap();
+    assert!(path.poses.len() > 50);
+    assert_eq!((end.x, end.y), (summary.final_pose.x, summary.final_pose.y));
     let world = world.unwrap();
     assert_eq!(world.entities.len(), 13);
     assert_eq!(world.entities[1].spheres.len(), 1);

@@ -46,7 +46,6 @@ pub struct McapLog<W: Write + Seek> {
     path: u16,
     sequence: u32,
     buf: Vec<u8>,
-    poses: Vec<Pose>,
 }
 
 fn ns(t: f64) -> u64 {
@@ -140,7 +139,6 @@ impl<W: Write + Seek> McapLog<W> {
             path,
             sequence: 0,
             buf: Vec::new(),
-            poses: Vec::new(),
         };
         log.write(world_ch, 0.0, &world_scene(world))?;
         log.write(body, 0.0, &body_scene(robot))?;
@@ -194,14 +192,6 @@ impl<W: Write + Seek> McapLog<W> {
             };
             self.write(ch, t, &msg)?;
         }
-        // The path keeps a pose every 0.1 m or 10° so it stays small on long runs.
-        let keep = self.poses.last().is_none_or(|q| {
-            (q.position() - p.position()).length() >= 0.1
-                || crate::pose::wrap_angle(q.yaw - p.yaw).abs() >= 10f64.to_radians()
-        });
-        if keep {
-            self.poses.push(p);
-        }
         Ok(())
     }
 
@@ -231,13 +221,12 @@ impl<W: Write + Seek> McapLog<W> {
         self.write(ch, scan.stamp, &msg)
     }
 
-    /// Logs the path and closes the file; returns the sink.
-    pub fn finish(mut self, end_time: f64, last: &Pose) -> Result<W, RecordError> {
-        self.poses.push(*last);
+    /// Logs the driven `path` and closes the file; returns the sink.
+    pub fn finish(mut self, end_time: f64, path: &[Pose]) -> Result<W, RecordError> {
         let msg = PosesInFrame {
             timestamp: stamp(end_time),
             frame_id: "world".into(),
-            poses: self.poses.iter().map(fg_pose).collect(),
+            poses: path.iter().map(fg_pose).collect(),
         };
         self.write(self.path, end_time, &msg)?;
         self.out.finish().map_err(mcap_err)?;

@@ -26,6 +26,7 @@ use crate::render::{Figure, RenderError, save_png};
 use crate::scenario::{Robot, Scenario};
 use crate::sensor::Scan;
 use crate::sim::{Observer, RunSummary, Step};
+use crate::vehicle::VehicleSpec;
 use crate::world::World;
 
 /// A recording that failed.
@@ -91,10 +92,11 @@ pub struct Recorder {
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
     #[cfg(feature = "mcap")]
     mcap: Option<mcap_log::McapLog<Out>>,
-    truth: Vec<DVec2>,
+    /// True poses, one per centimetre driven or more (for the figure and the MCAP path).
+    truth: Vec<Pose>,
     odometry: Vec<DVec2>,
     bumps: Vec<DVec2>,
-    vehicle_tracks: f64,
+    vehicle: &'static VehicleSpec,
     written: Vec<PathBuf>,
 }
 
@@ -160,7 +162,7 @@ impl Recorder {
             truth: Vec::new(),
             odometry: Vec::new(),
             bumps: Vec::new(),
-            vehicle_tracks: robot.vehicle.wheel_separation,
+            vehicle: robot.vehicle,
             written,
         })
     }
@@ -179,24 +181,24 @@ impl Recorder {
             log.finish().map_err(io_at(&path))?;
             self.written.push(path);
         }
+        // The last pose is not in the step log (steps log their start).
+        self.truth.push(summary.final_pose);
         #[cfg(feature = "mcap")]
         if let Some(m) = self.mcap.take() {
             let path = self.dir.join(files::MCAP);
-            m.finish(summary.duration, &summary.final_pose)?
+            m.finish(summary.duration, &self.truth)?
                 .flush()
                 .map_err(io_at(&path))?;
             self.written.push(path);
         }
-        // The last pose is not in the step log (steps log their start).
-        self.truth
-            .push(DVec2::new(summary.final_pose.x, summary.final_pose.y));
         self.odometry.push(DVec2::new(
             summary.final_odometry.x,
             summary.final_odometry.y,
         ));
         let mut fig = Figure::of_world(&scenario.world, None, pixels)?;
         fig.draw_path(&self.odometry, [150, 150, 150], 2.0, "path: odometry");
-        fig.draw_path(&self.truth, [20, 120, 40], 3.0, "path: true");
+        let truth: Vec<DVec2> = self.truth.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+        fig.draw_path(&truth, [20, 120, 40], 3.0, "path: true");
         fig.draw_crosses(&self.bumps, [200, 0, 160], "bump");
         fig.draw_robot(&robot.start, robot.vehicle);
         fig.draw_robot(&summary.final_pose, robot.vehicle);
@@ -248,7 +250,7 @@ impl Observer for Recorder {
 
     fn on_step(&mut self, s: &Step) -> Result<(), RecordError> {
         let (t, o) = (&s.truth, &s.odometry);
-        let half = s.command.omega * self.vehicle_tracks / 2.0;
+        let (left, right) = self.vehicle.tracks(s.command);
         let row = format!(
             "{:.3},{:.5},{:.5},{:.4},{:.5},{:.5},{:.4},{:.4},{:.3},{:.4},{:.4},{}\n",
             s.time,
@@ -260,8 +262,8 @@ impl Observer for Recorder {
             o.yaw.to_degrees(),
             s.command.v,
             s.command.omega.to_degrees(),
-            s.command.v - half,
-            s.command.v + half,
+            left,
+            right,
             u8::from(s.bumped)
         );
         self.trajectory
@@ -274,14 +276,14 @@ impl Observer for Recorder {
         if let Some(m) = &mut self.mcap {
             m.step(s)?;
         }
-        let keep = |v: &mut Vec<DVec2>, p: &Pose| {
-            let q = DVec2::new(p.x, p.y);
-            if v.last().is_none_or(|l| l.distance_squared(q) >= 1e-4) {
-                v.push(q);
-            }
-        };
-        keep(&mut self.truth, t);
-        keep(&mut self.odometry, o);
+        let moved = |a: DVec2, b: DVec2| a.distance_squared(b) >= 1e-4;
+        let here = |p: &Pose| DVec2::new(p.x, p.y);
+        if self.truth.last().is_none_or(|l| moved(here(l), here(t))) {
+            self.truth.push(*t);
+        }
+        if self.odometry.last().is_none_or(|l| moved(*l, here(o))) {
+            self.odometry.push(here(o));
+        }
         if s.bumped && self.bumps.len() < crate::sim::MAX_BUMP_EVENTS {
             self.bumps.push(DVec2::new(t.x, t.y));
         }
