@@ -79,6 +79,11 @@ fn z_overlap(lo: f64, hi: f64, b: &OrientedBox) -> bool {
     lo <= b.center.z + b.half.z && hi >= b.center.z - b.half.z
 }
 
+/// Two z-yawed boxes overlap when their height bands and their footprints do.
+fn box_overlap(b: &OrientedBox, rect: &Rect, body: &OrientedBox) -> bool {
+    z_overlap(b.center.z - b.half.z, b.center.z + b.half.z, body) && rect.overlaps(&Rect::of(b))
+}
+
 impl Shape {
     /// Whether the shape and the box share a point (touching counts).
     pub fn overlaps_box(&self, body: &OrientedBox) -> bool {
@@ -90,10 +95,7 @@ impl Shape {
                 let dz = dz.max(0.0);
                 rect.distance_squared(center.truncate()) + dz * dz <= radius * radius
             }
-            Self::Box(b) => {
-                z_overlap(b.center.z - b.half.z, b.center.z + b.half.z, body)
-                    && rect.overlaps(&Rect::of(b))
-            }
+            Self::Box(b) => box_overlap(b, &rect, body),
             Self::Cylinder {
                 center,
                 radius,
@@ -102,10 +104,7 @@ impl Shape {
                 z_overlap(center.z - half_height, center.z + half_height, body)
                     && rect.distance_squared(center.truncate()) <= radius * radius
             }
-            Self::Wall { segments, .. } => segments.iter().any(|s| {
-                z_overlap(s.center.z - s.half.z, s.center.z + s.half.z, body)
-                    && rect.overlaps(&Rect::of(s))
-            }),
+            Self::Wall { segments, .. } => segments.iter().any(|s| box_overlap(s, &rect, body)),
             Self::Prism {
                 polygon,
                 z_min,
