@@ -251,8 +251,10 @@ impl Observer for Recorder {
     fn on_step(&mut self, s: &Step) -> Result<(), RecordError> {
         let (t, o) = (&s.truth, &s.odometry);
         let (left, right) = self.vehicle.tracks(s.command);
-        let row = format!(
-            "{:.3},{:.5},{:.5},{:.4},{:.5},{:.5},{:.4},{:.4},{:.3},{:.4},{:.4},{}\n",
+        // Straight into the buffered file: no string per step.
+        writeln!(
+            self.trajectory,
+            "{:.3},{:.5},{:.5},{:.4},{:.5},{:.5},{:.4},{:.4},{:.3},{:.4},{:.4},{}",
             s.time,
             t.x,
             t.y,
@@ -265,13 +267,11 @@ impl Observer for Recorder {
             left,
             right,
             u8::from(s.bumped)
-        );
-        self.trajectory
-            .write_all(row.as_bytes())
-            .map_err(|source| RecordError::Io {
-                path: self.dir.join(files::TRAJECTORY),
-                source,
-            })?;
+        )
+        .map_err(|source| RecordError::Io {
+            path: self.dir.join(files::TRAJECTORY),
+            source,
+        })?;
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
             m.step(s)?;
