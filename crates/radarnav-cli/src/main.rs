@@ -30,7 +30,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// The thesis experiment on foliage-wall: figures 7-10, ground truth, and a table.
+    /// The thesis experiment on foliage-wall: figures 7-10, ground truth and a table; then
+    /// the mission driven while mapping with the radar and with the laser, and their scores.
     Demo {
         /// Output directory.
         #[arg(long, default_value = "out")]
@@ -104,9 +105,22 @@ enum Command {
         /// Do not write run.mcap.
         #[arg(long)]
         no_mcap: bool,
-        /// Longer side of the map area of path.png, pixels.
+        /// Longer side of the map area of path.png and the map figures, pixels.
         #[arg(long, default_value_t = 900)]
         pixels: u32,
+        /// Maps to build, comma-separated; each a sensor name or sensors joined by `+`
+        /// (`radar,laser,radar+laser`). Default: one map per sensor of the robot.
+        #[arg(long, value_delimiter = ',')]
+        maps: Vec<String>,
+        /// Build no map.
+        #[arg(long, conflicts_with = "maps")]
+        no_maps: bool,
+        /// Pose that places the scans in the maps: `truth` or `odometry`.
+        #[arg(long, default_value = "truth")]
+        map_pose: String,
+        /// Map cell size, metres.
+        #[arg(long, default_value_t = 0.05)]
+        map_resolution: f64,
     },
     /// Time scans of every sensor of a scenario's first robot; prints rays per second.
     /// With --sim, time a whole simulated run instead.
@@ -215,6 +229,10 @@ fn run(cli: Cli) -> Result<()> {
             duration,
             no_mcap,
             pixels,
+            maps,
+            no_maps,
+            map_pose,
+            map_resolution,
         } => {
             let s = load(&scenario)?;
             let base = Path::new(&scenario)
@@ -231,6 +249,9 @@ fn run(cli: Cli) -> Result<()> {
                 duration,
                 mcap: !no_mcap,
                 pixels,
+                maps: (!no_maps).then_some(maps.as_slice()),
+                map_pose: &map_pose,
+                map_resolution,
             })
         }
         Command::Bench {
@@ -313,6 +334,81 @@ fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
         );
     }
     say!("figures written to {}", out.display());
+    map_demo(&s, seed, out)
+}
+
+/// The second half of the demo: the foliage-wall mission driven once while four maps are
+/// built (radar and laser, each at the true and at the odometry pose), then scored.
+fn map_demo(s: &Scenario, seed: u64, out: &Path) -> Result<()> {
+    use radarnav::map::{PoseSource, export};
+    let maps = [
+        ("radar", PoseSource::Truth, "map_radar"),
+        ("laser", PoseSource::Truth, "map_laser"),
+        ("radar", PoseSource::Odometry, "map_radar_odometry"),
+        ("laser", PoseSource::Odometry, "map_laser_odometry"),
+    ];
+    let specs: Vec<(&str, PoseSource)> = maps.iter().map(|m| (m.0, m.1)).collect();
+    let t0 = Instant::now();
+    let e = radarnav::demo::mapping_experiment(s, seed, &specs, 0.05)?;
+    let wall = t0.elapsed().as_secs_f64();
+    let robot = s.robot(None).context("foliage-wall has a robot")?;
+    say!("");
+    say!(
+        "foliage-wall mission driven once ({:.1} s, {:.1} m, {} bumps, {:.2} s wall), mapped at 0.05 m:",
+        e.summary.duration,
+        e.summary.distance,
+        e.summary.bumps,
+        wall
+    );
+    say!(
+        "{:<8} {:<9} {:>6} {:>10} {:>22} {:>10} {:>10} {:>10} {:>10}",
+        "map",
+        "pose",
+        "scans",
+        "known m2",
+        "hidden area clear",
+        "obst prec",
+        "obst rec",
+        "free prec",
+        "free rec"
+    );
+    let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
+    for (m, (_, _, stem)) in e.maps.iter().zip(maps) {
+        let sc = &m.scores;
+        say!(
+            "{:<8} {:<9} {:>6} {:>10.1} {:>22} {:>10} {:>10} {:>10} {:>10}",
+            m.mapper.name(),
+            m.mapper.config().pose.as_str(),
+            m.mapper.scans(),
+            sc.known_area_m2,
+            format!(
+                "{:.1} of {:.1} m2 ({})",
+                sc.hidden_clear_m2,
+                sc.hidden_area_m2,
+                pct(sc.hidden_coverage)
+            ),
+            pct(sc.obstacle_precision),
+            pct(sc.obstacle_recall),
+            pct(sc.free_precision),
+            pct(sc.free_recall)
+        );
+        let title = format!(
+            "foliage-wall - {} map ({} pose): {} of the hidden area clear",
+            m.mapper.name(),
+            m.mapper.config().pose.as_str(),
+            pct(sc.hidden_coverage)
+        );
+        let overlay = export::Overlay {
+            path: &e.path,
+            robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
+            region: Some(radarnav::render::world_region(&s.world)),
+        };
+        export::write_all(m.mapper.grid(), out, stem, &title, 900, &overlay)?;
+    }
+    say!(
+        "maps written to {} (map_*.png in the thesis' palette, .pgm/.yaml for ROS map_server, .npy raw log-odds)",
+        out.display()
+    );
     Ok(())
 }
 

@@ -9,12 +9,14 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use radarnav::Scenario;
+use radarnav::map::{MapConfig, Mapper, PoseSource};
 use radarnav::mission::{MissionKind, TeleopSource, parse_teleop_csv};
 use radarnav::nav::{Idle, TeleopController};
 use radarnav::record::{RecordOptions, Recorder};
 use radarnav::scenario::Robot;
-use radarnav::sensor::Scan;
-use radarnav::sim::{Controller, NoObserver, Observer, RunSettings, RunSummary, Simulation, Step};
+use radarnav::sim::{
+    Controller, NoObserver, Observer, RunSettings, RunSummary, ScanEvent, Simulation, Step,
+};
 
 /// What `run` and `bench --sim` share: which robot, which controller.
 pub struct Plan<'a> {
@@ -100,8 +102,8 @@ struct WithProgress<'a, O> {
 
 impl<O: Observer> Observer for WithProgress<'_, O> {
     type Error = O::Error;
-    fn on_scan(&mut self, i: usize, scan: &Scan) -> Result<(), O::Error> {
-        self.inner.on_scan(i, scan)
+    fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), O::Error> {
+        self.inner.on_scan(event)
     }
     fn on_step(&mut self, step: &Step) -> Result<(), O::Error> {
         self.bar.inc(1);
@@ -150,6 +152,45 @@ pub struct RunArgs<'a> {
     pub duration: Option<f64>,
     pub mcap: bool,
     pub pixels: u32,
+    /// Map specs (`None`: no maps; empty: one per sensor).
+    pub maps: Option<&'a [String]>,
+    pub map_pose: &'a str,
+    pub map_resolution: f64,
+}
+
+/// The mappers `run` builds.
+fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<Vec<Mapper>> {
+    let Some(specs) = a.maps else {
+        return Ok(Vec::new());
+    };
+    let pose = PoseSource::parse(a.map_pose).with_context(|| {
+        format!(
+            "--map-pose `{}`: expected `truth` or `odometry`",
+            a.map_pose
+        )
+    })?;
+    let config = MapConfig {
+        resolution: a.map_resolution,
+        pose,
+        ..MapConfig::default()
+    };
+    let specs: Vec<String> = if specs.is_empty() {
+        robot.sensors.iter().map(|s| s.name.clone()).collect()
+    } else {
+        specs.to_vec()
+    };
+    let maps = specs
+        .iter()
+        .map(|spec| {
+            Mapper::from_spec(spec, robot, config).with_context(|| format!("--maps `{spec}`"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut names: Vec<&str> = maps.iter().map(Mapper::name).collect();
+    names.sort_unstable();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        bail!("--maps names the map `{}` twice", w[0]);
+    }
+    Ok(maps)
 }
 
 fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> Result<RunSettings> {
@@ -171,14 +212,15 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
     let s = a.scenario;
     let plan = plan(s, a.robot, a.teleop, a.base, false)?;
     let settings = settings(s, a.seed, a.duration)?;
+    let maps = mappers(a, plan.robot)?;
     let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
     let options = RecordOptions {
         mcap: a.mcap,
         ..RecordOptions::default()
     };
-    let mut rec = Recorder::create(a.out, &s.world, plan.robot, options)?;
+    let mut rec = Recorder::create(a.out, &s.world, plan.robot, options)?.with_maps(maps)?;
     let (summary, wall) = drive(&mut sim, settings.dt, &mut rec)?;
-    let files = rec.finish(s, plan.robot, &summary, a.pixels)?;
+    let recorded = rec.finish(s, plan.robot, &summary, a.pixels)?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -209,7 +251,25 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
             c.name, c.scans, c.rate_hz
         )?;
     }
-    writeln!(out, "  wrote {} files to {}", files.len(), a.out.display())?;
+    let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
+    for (name, m) in &recorded.maps {
+        writeln!(
+            out,
+            "  map {name:<12} hidden area clear {:>6} of {:.1} m2, obstacles P/R {} / {}, free P/R {} / {}",
+            pct(m.hidden_coverage),
+            m.hidden_area_m2,
+            pct(m.obstacle_precision),
+            pct(m.obstacle_recall),
+            pct(m.free_precision),
+            pct(m.free_recall)
+        )?;
+    }
+    writeln!(
+        out,
+        "  wrote {} files to {}",
+        recorded.files.len(),
+        a.out.display()
+    )?;
     Ok(())
 }
 

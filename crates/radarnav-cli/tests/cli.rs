@@ -97,6 +97,32 @@ fn demo_writes_the_four_figures_and_the_table() {
         share("fig8_radar") > 0.0 && share("fig10_radar_n100") > 0.0,
         "{table}"
     );
+    // The mapping half: a row per map; the radar reveals much of the hidden area, the laser
+    // none of it.
+    let hidden = |map: &str, pose: &str| -> f64 {
+        let line = table
+            .lines()
+            .find(|l| l.split_whitespace().take(2).eq([map, pose]))
+            .unwrap_or_else(|| panic!("{table}"));
+        let open = line.find('(').unwrap();
+        let close = line.find("%)").unwrap();
+        line[open + 1..close].parse().unwrap()
+    };
+    assert_eq!(hidden("laser", "truth"), 0.0);
+    assert!(hidden("radar", "truth") > 50.0, "{table}");
+    assert!(hidden("radar", "odometry") > 50.0, "{table}");
+    for stem in [
+        "map_radar",
+        "map_laser",
+        "map_radar_odometry",
+        "map_laser_odometry",
+    ] {
+        assert!(read(&dir, &format!("{stem}.png")).starts_with(b"\x89PNG"));
+        assert!(read(&dir, &format!("{stem}.pgm")).starts_with(b"P5\n"));
+        let yaml = String::from_utf8(read(&dir, &format!("{stem}.yaml"))).unwrap();
+        assert!(yaml.contains(&format!("image: {stem}.pgm")), "{yaml}");
+        assert!(read(&dir, &format!("{stem}.npy")).starts_with(b"\x93NUMPY"));
+    }
 }
 
 #[test]
@@ -198,6 +224,14 @@ fn run_writes_every_file_and_is_deterministic() {
     assert_eq!(
         names,
         [
+            "map_laser.npy",
+            "map_laser.pgm",
+            "map_laser.png",
+            "map_laser.yaml",
+            "map_radar.npy",
+            "map_radar.pgm",
+            "map_radar.png",
+            "map_radar.yaml",
             "path.png",
             "run.mcap",
             "scans/laser.rnscan",
@@ -241,6 +275,62 @@ fn run_with_a_teleop_csv_and_clear_errors() {
     assert!((summary["duration"].as_f64().unwrap() - 1.5).abs() < 1e-9);
     assert!((summary["distance"].as_f64().unwrap() - 0.3).abs() < 1e-9);
     assert!(!dir.join("out/run.mcap").exists());
+    // --maps picks the maps; --map-pose the pose.
+    let out = radarnav(&[
+        "run",
+        "foliage-wall",
+        "--teleop",
+        csv.to_str().unwrap(),
+        "--no-mcap",
+        "--maps",
+        "radar+laser",
+        "--map-pose",
+        "odometry",
+        "--out",
+        dir.join("fused").to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&read(&dir.join("fused"), "summary.json")).unwrap();
+    assert_eq!(summary["maps"].as_array().unwrap().len(), 1);
+    assert_eq!(summary["maps"][0]["name"], "radar+laser");
+    assert_eq!(summary["maps"][0]["pose"], "odometry");
+    assert!(dir.join("fused/map_radar+laser.pgm").exists());
+    for (args, want) in [
+        (
+            &["--maps", "radar,sonar"][..],
+            "robot `p3at` has no sensor `sonar` (it has: radar, laser)",
+        ),
+        (&["--maps", "radar,radar"], "names the map `radar` twice"),
+        (
+            &["--map-pose", "gps"],
+            "--map-pose `gps`: expected `truth` or `odometry`",
+        ),
+        (
+            &["--map-resolution", "0"],
+            "resolution must be a finite number > 0, found 0",
+        ),
+    ] {
+        let mut all = vec![
+            "run",
+            "foliage-wall",
+            "--duration",
+            "0.5",
+            "--no-mcap",
+            "--out",
+        ];
+        let o = dir.join("bad-map");
+        all.push(o.to_str().unwrap());
+        all.extend_from_slice(args);
+        let out = radarnav(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
 
     std::fs::write(&csv, "duration,left,right\n1.0,0.3,0.3\n1.0,0.3\n").unwrap();
     let out = radarnav(&["run", "foliage-wall", "--teleop", csv.to_str().unwrap()]);

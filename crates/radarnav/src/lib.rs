@@ -4,13 +4,15 @@
 //! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
 //! Modules: [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files
 //! and the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`]
-//! (the P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop),
+//! (the P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`]
+//! (occupancy grids that tell seen-through from passable),
 //! [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs: CSV, scan logs,
 //! MCAP), [`render`] (figures), [`demo`] (the thesis experiment).
 
 #![warn(missing_docs)]
 
 pub mod demo;
+pub mod map;
 pub mod mission;
 pub mod nav;
 pub mod pose;

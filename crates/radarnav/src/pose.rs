@@ -27,6 +27,11 @@ impl Pose {
         DVec3::new(self.x, self.y, self.z)
     }
 
+    /// The position in the ground plane.
+    pub fn xy(&self) -> glam::DVec2 {
+        glam::DVec2::new(self.x, self.y)
+    }
+
     /// `self ∘ child`: the pose of `child` (given relative to `self`) in `self`'s parent frame.
     pub fn compose(&self, child: &Pose) -> Pose {
         let (s, c) = self.yaw.sin_cos();

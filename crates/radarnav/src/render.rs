@@ -38,6 +38,14 @@ const TITLE_H: f64 = 34.0;
 const MARGIN: f64 = 16.0;
 const BOTTOM_H: f64 = 40.0;
 
+/// The area a figure of `world` shows by default: its bounds plus 0.5 m (xy min, max).
+pub fn world_region(world: &World) -> (DVec2, DVec2) {
+    match world.bounds() {
+        Some((lo, hi)) => (lo.truncate() - 0.5, hi.truncate() + 0.5),
+        None => (DVec2::splat(-5.0), DVec2::splat(5.0)),
+    }
+}
+
 /// A figure being drawn.
 pub struct Figure {
     pixmap: Pixmap,
@@ -78,10 +86,15 @@ impl Figure {
         region: Option<(DVec2, DVec2)>,
         pixels: u32,
     ) -> Result<Self, RenderError> {
-        let (min, max) = region.unwrap_or_else(|| match world.bounds() {
-            Some((lo, hi)) => (lo.truncate() - 0.5, hi.truncate() + 0.5),
-            None => (DVec2::splat(-5.0), DVec2::splat(5.0)),
-        });
+        let region = region.unwrap_or_else(|| world_region(world));
+        let mut fig = Self::blank(region, pixels)?;
+        fig.draw_objects(world);
+        Ok(fig)
+    }
+
+    /// An empty figure (white, with a 1 m grid) showing `region` (xy min, max) at about
+    /// `pixels` pixels along its longer side.
+    pub fn blank((min, max): (DVec2, DVec2), pixels: u32) -> Result<Self, RenderError> {
         let span = (max - min).max(DVec2::splat(1e-3));
         let scale = f64::from(pixels.clamp(64, 8192)) / span.x.max(span.y);
         let w = (span.x * scale + 2.0 * MARGIN + LEGEND_W).ceil() as u32;
@@ -96,8 +109,48 @@ impl Figure {
             legend: Vec::new(),
         };
         fig.draw_grid();
-        fig.draw_objects(world);
         Ok(fig)
+    }
+
+    /// Draws a raster of `width` × `height` square cells of `cell` metres whose cell (0, 0)
+    /// has its lower-left corner at `origin`; `rgb(column, row)` colours each cell (row 0 is
+    /// the lowest). Nearest-neighbour: cells stay crisp squares.
+    pub fn draw_cells(
+        &mut self,
+        origin: DVec2,
+        cell: f64,
+        (width, height): (usize, usize),
+        rgb: impl Fn(usize, usize) -> [u8; 3],
+    ) -> Result<(), RenderError> {
+        let size = (u32::try_from(width), u32::try_from(height));
+        let (Ok(w), Ok(h)) = size else {
+            return Err(RenderError::Size(u32::MAX, u32::MAX));
+        };
+        let mut raster = Pixmap::new(w, h).ok_or(RenderError::Size(w, h))?;
+        let data = raster.data_mut();
+        // Pixmap rows run top-down: the highest map row first.
+        for row in 0..height {
+            for col in 0..width {
+                let k = ((height - 1 - row) * width + col) * 4;
+                let [r, g, b] = rgb(col, row);
+                data[k..k + 4].copy_from_slice(&[r, g, b, 255]);
+            }
+        }
+        let (x0, y0) = self.px(origin + DVec2::new(0.0, height as f64 * cell));
+        let k = (cell * self.scale) as f32;
+        let paint = tiny_skia::PixmapPaint {
+            quality: tiny_skia::FilterQuality::Nearest,
+            ..tiny_skia::PixmapPaint::default()
+        };
+        self.pixmap.draw_pixmap(
+            0,
+            0,
+            raster.as_ref(),
+            &paint,
+            Transform::from_row(k, 0.0, 0.0, k, x0, y0),
+            None,
+        );
+        Ok(())
     }
 
     /// World point to pixel.
@@ -318,7 +371,8 @@ impl Figure {
         self.add_legend(rgb, label);
     }
 
-    fn add_legend(&mut self, rgb: [u8; 3], label: &str) {
+    /// Adds a legend entry (once per label).
+    pub fn add_legend(&mut self, rgb: [u8; 3], label: &str) {
         if !self.legend.iter().any(|(_, l)| l == label) {
             self.legend.push((rgb, label.to_owned()));
         }
@@ -356,6 +410,19 @@ impl Figure {
             if let Some(r) = Rect::from_xywh(x0 as f32, y as f32, 14.0, 14.0) {
                 self.pixmap
                     .fill_rect(r, &paint(*rgb, 255), Transform::identity(), None);
+                // A frame, so that a white swatch shows on the white page.
+                let frame = PathBuilder::from_rect(r);
+                let stroke = Stroke {
+                    width: 1.0,
+                    ..Stroke::default()
+                };
+                self.pixmap.stroke_path(
+                    &frame,
+                    &paint([120, 120, 120], 255),
+                    &stroke,
+                    Transform::identity(),
+                    None,
+                );
             }
             self.text(x0 + 20, y + 3, label, [30, 30, 30], 1);
         }

@@ -4,8 +4,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use foxglove::Decode;
-use foxglove::schemas::{LaserScan, PosesInFrame, SceneUpdate};
+use foxglove::schemas::{Grid, LaserScan, PosesInFrame, SceneUpdate};
 use radarnav::Scenario;
+use radarnav::map::{MapConfig, Mapper};
 use radarnav::record::{RecordOptions, Recorder, files, read_scan_log};
 use radarnav::sim::{RunOutcome, RunSettings, RunSummary, Simulation};
 
@@ -15,8 +16,9 @@ fn tmp(name: &str) -> PathBuf {
     dir
 }
 
-/// Runs the built-in foliage-wall mission for `duration` seconds into `dir`.
-fn record(dir: &Path, duration: f64) -> RunSummary {
+/// Runs the built-in foliage-wall mission for `duration` seconds into `dir`, building a map
+/// from each of `maps`.
+fn record(dir: &Path, duration: f64, maps: &[&str]) -> RunSummary {
     let s = Scenario::builtin("foliage-wall").unwrap();
     let robot = &s.robots[0];
     let controller = s.mission.as_ref().unwrap().controller().unwrap();
@@ -25,7 +27,14 @@ fn record(dir: &Path, duration: f64) -> RunSummary {
         ..RunSettings::of(&s)
     };
     let mut sim = Simulation::new(&s.world, robot, controller, settings).unwrap();
-    let mut rec = Recorder::create(dir, &s.world, robot, RecordOptions::default()).unwrap();
+    let maps = maps
+        .iter()
+        .map(|m| Mapper::from_spec(m, robot, MapConfig::default()).unwrap())
+        .collect();
+    let mut rec = Recorder::create(dir, &s.world, robot, RecordOptions::default())
+        .unwrap()
+        .with_maps(maps)
+        .unwrap();
     let summary = sim.run(&mut rec).unwrap();
     rec.finish(&s, robot, &summary, 400).unwrap();
     summary
@@ -34,7 +43,7 @@ fn record(dir: &Path, duration: f64) -> RunSummary {
 #[test]
 fn mcap_reads_back_with_the_expected_channels_and_counts() {
     let dir = tmp("record-mcap");
-    let summary = record(&dir, 3.0);
+    let summary = record(&dir, 3.0, &["radar", "laser"]);
     assert_eq!(summary.outcome, RunOutcome::Timeout);
     assert_eq!(summary.steps, 60);
     let bytes = std::fs::read(dir.join(files::MCAP)).unwrap();
@@ -43,6 +52,7 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     let mut last_scan = None;
     let mut world = None;
     let mut path = None;
+    let mut grid = None;
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         let topic = m.channel.topic.clone();
@@ -59,6 +69,9 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
         }
         if topic == "/world" {
             world = Some(SceneUpdate::decode(m.data.as_ref()).unwrap());
+        }
+        if topic == "/p3at/map/radar" {
+            grid = Some((m.log_time, Grid::decode(m.data.as_ref()).unwrap()));
         }
     }
     let expect = |topic: &str, schema: &str, n: usize| {
@@ -79,7 +92,26 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     expect("/p3at/scan/radar", "foxglove.LaserScan", 12);
     expect("/p3at/scan/laser", "foxglove.LaserScan", 120);
     expect("/p3at/path", "foxglove.PosesInFrame", 1);
-    assert_eq!(counts.len(), 8);
+    // Maps at t = 0, 1 and 2 s, and at the end.
+    expect("/p3at/map/radar", "foxglove.Grid", 4);
+    expect("/p3at/map/laser", "foxglove.Grid", 4);
+    assert_eq!(counts.len(), 10);
+    let (t, grid) = grid.unwrap();
+    assert_eq!(t, 3_000_000_000);
+    assert_eq!(grid.frame_id, "world");
+    assert_eq!(grid.cell_stride, 5);
+    assert_eq!(grid.row_stride, 5 * grid.column_count);
+    assert_eq!(grid.data.len() % grid.row_stride as usize, 0);
+    let names: Vec<&str> = grid.fields.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["red", "green", "blue", "alpha", "class"]);
+    assert_eq!(grid.cell_size.unwrap().x, 0.05);
+    // The room (12 × 8 m) and more is known; every class code is 0..=3 and the radar map has
+    // clear, see-through and obstacle cells.
+    let rows = grid.data.len() / grid.row_stride as usize;
+    assert!(grid.column_count as f64 * 0.05 > 11.0 && rows as f64 * 0.05 > 7.5);
+    let classes: std::collections::BTreeSet<u8> = grid.data.chunks(5).map(|c| c[4]).collect();
+    assert!(classes.is_subset(&[0, 1, 2, 3].into()));
+    assert!(classes.is_superset(&[1, 2, 3].into()), "{classes:?}");
     // The last laser scan: 1081 ranges over 270°, stamped 119/40 s.
     let (t, scan) = last_scan.unwrap();
     assert_eq!(t, 2_975_000_000);
@@ -99,7 +131,7 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
 #[test]
 fn scan_logs_trajectory_and_summary_read_back() {
     let dir = tmp("record-files");
-    let summary = record(&dir, 2.0);
+    let summary = record(&dir, 2.0, &["radar"]);
     let (header, scans) =
         read_scan_log(&std::fs::read(dir.join("scans/radar.rnscan")).unwrap()).unwrap();
     assert_eq!(header.sensor, "radar");
@@ -142,12 +174,45 @@ fn scan_logs_trajectory_and_summary_read_back() {
     assert!((json["distance"].as_f64().unwrap() - summary.distance).abs() < 1e-12);
     let png = std::fs::read(dir.join(files::PATH_PNG)).unwrap();
     assert_eq!(&png[1..4], b"PNG");
+
+    // The radar map: its entry in the summary and its four files.
+    let map = &json["maps"][0];
+    assert_eq!(map["name"], "radar");
+    assert_eq!(map["pose"], "truth");
+    assert_eq!(map["scans"], 8);
+    assert_eq!(map["resolution"], 0.05);
+    assert!(map["hidden_coverage"].as_f64().unwrap() > 0.0);
+    assert!(map["hidden_area_m2"].as_f64().unwrap() > 25.0);
+    let png = std::fs::read(dir.join("map_radar.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let (cols, rows) = (
+        map["columns"].as_u64().unwrap(),
+        map["rows"].as_u64().unwrap(),
+    );
+    let pgm = std::fs::read(dir.join("map_radar.pgm")).unwrap();
+    let header = format!("P5\n# radarnav occupancy grid\n{cols} {rows}\n255\n");
+    assert!(pgm.starts_with(header.as_bytes()));
+    assert_eq!(pgm.len(), header.len() + (cols * rows) as usize);
+    assert!(
+        pgm[header.len()..]
+            .iter()
+            .all(|p| [0, 205, 254].contains(p))
+    );
+    let yaml = std::fs::read_to_string(dir.join("map_radar.yaml")).unwrap();
+    assert!(yaml.contains("image: map_radar.pgm\n"));
+    assert!(yaml.contains("resolution: 0.05\n"));
+    let o = &map["origin"];
+    assert!(yaml.contains(&format!("origin: [{}, {}, 0.0]", o[0], o[1])));
+    let npy = std::fs::read(dir.join("map_radar.npy")).unwrap();
+    assert!(npy.starts_with(b"\x93NUMPY"));
+    let hl = u16::from_le_bytes([npy[8], npy[9]]) as usize;
+    assert_eq!(npy.len(), 10 + hl + 2 * 4 * (cols * rows) as usize);
 }
 
 #[test]
 fn truncated_scan_log_is_an_error_not_a_panic() {
     let dir = tmp("record-truncated");
-    record(&dir, 0.5);
+    record(&dir, 0.5, &[]);
     let bytes = std::fs::read(dir.join("scans/radar.rnscan")).unwrap();
     let e = read_scan_log(&bytes[..bytes.len() - 3]).unwrap_err();
     assert!(e.to_string().starts_with("truncated"), "{e}");

@@ -12,18 +12,26 @@
 //!   intensities code how each ray ended: 0 no return, 1 budget ran out, 2 solid. A sensor with
 //!   several planes logs the one closest to horizontal.
 //! * `/<robot>/path` (`foxglove.PosesInFrame`, once at the end): the driven path.
+//! * `/<robot>/map/<name>` (`foxglove.Grid`, frame `world`, every [`super::GRID_PERIOD`] s and
+//!   at the end): each occupancy map, cropped to its known cells. Fields `red`, `green`,
+//!   `blue`, `alpha` (the thesis' palette; unknown cells half transparent) and `class`
+//!   (0 unknown, 1 sensor-clear, 2 seen through but impassable, 3 obstacle), all `uint8`.
 
 use std::collections::BTreeMap;
 use std::io::{Seek, Write};
 
 use foxglove::Encode;
 use foxglove::schemas::{
-    Color, CubePrimitive, CylinderPrimitive, FrameTransform, LaserScan, LinePrimitive, Point3,
-    Pose as FgPose, PoseInFrame, PosesInFrame, Quaternion, SceneEntity, SceneUpdate,
-    SpherePrimitive, Timestamp, Vector3, line_primitive,
+    Color, CubePrimitive, CylinderPrimitive, FrameTransform, Grid as FgGrid, LaserScan,
+    LinePrimitive, PackedElementField, Point3, Pose as FgPose, PoseInFrame, PosesInFrame,
+    Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, Vector2, Vector3,
+    line_primitive, packed_element_field::NumericType,
 };
 
 use super::RecordError;
+use crate::map::CellClass;
+use crate::map::Grid;
+use crate::map::export::known_extent;
 use crate::pose::Pose;
 use crate::scenario::Robot;
 use crate::sensor::{HitKind, Scan};
@@ -44,6 +52,7 @@ pub struct McapLog<W: Write + Seek> {
     odometry: u16,
     scans: Vec<(u16, usize)>,
     path: u16,
+    maps: Vec<u16>,
     sequence: u32,
     buf: Vec<u8>,
 }
@@ -137,6 +146,7 @@ impl<W: Write + Seek> McapLog<W> {
             odometry,
             scans,
             path,
+            maps: Vec::new(),
             sequence: 0,
             buf: Vec::new(),
         };
@@ -219,6 +229,68 @@ impl<W: Write + Seek> McapLog<W> {
                 .collect(),
         };
         self.write(ch, scan.stamp, &msg)
+    }
+
+    /// Adds a channel for the map `name`; returns its index for [`McapLog::grid`].
+    pub fn add_map(&mut self, name: &str) -> Result<usize, RecordError> {
+        let schema = FgGrid::get_schema().ok_or_else(|| mcap_err("schema missing"))?;
+        let id = self
+            .out
+            .add_schema(&schema.name, &schema.encoding, &schema.data)
+            .map_err(mcap_err)?;
+        let topic = format!("/{}/map/{name}", self.robot);
+        let ch = self
+            .out
+            .add_channel(id, &topic, "protobuf", &BTreeMap::new())
+            .map_err(mcap_err)?;
+        self.maps.push(ch);
+        Ok(self.maps.len() - 1)
+    }
+
+    /// Logs map `map` (an index from [`McapLog::add_map`]) as it is at time `t`; nothing while
+    /// the map is empty.
+    pub fn grid(&mut self, map: usize, t: f64, grid: &Grid) -> Result<(), RecordError> {
+        let Some(((c0, c1), (r0, r1))) = known_extent(grid, 0) else {
+            return Ok(());
+        };
+        let (w, h) = (c1 - c0 + 1, r1 - r0 + 1);
+        let mut data = Vec::with_capacity(w * h * 5);
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let class = grid.class_at(r * grid.width() + c);
+                let [red, green, blue] = class.rgb();
+                let alpha = if class == CellClass::Unknown {
+                    100
+                } else {
+                    255
+                };
+                data.extend([red, green, blue, alpha, class as u8]);
+            }
+        }
+        let field = |name: &str, offset: u32| PackedElementField {
+            name: name.into(),
+            offset,
+            r#type: NumericType::Uint8 as i32,
+        };
+        let res = grid.resolution();
+        let o = grid.origin() + glam::DVec2::new(c0 as f64, r0 as f64) * res;
+        let msg = FgGrid {
+            timestamp: stamp(t),
+            frame_id: "world".into(),
+            pose: Some(fg_pose(&Pose::new(o.x, o.y, 0.0, 0.0))),
+            column_count: w as u32,
+            cell_size: Some(Vector2 { x: res, y: res }),
+            row_stride: (w * 5) as u32,
+            cell_stride: 5,
+            fields: ["red", "green", "blue", "alpha", "class"]
+                .iter()
+                .zip(0..)
+                .map(|(n, k)| field(n, k))
+                .collect(),
+            data: data.into(),
+        };
+        let ch = self.maps[map];
+        self.write(ch, t, &msg)
     }
 
     /// Logs the driven `path` and closes the file; returns the sink.

@@ -1,5 +1,7 @@
 //! Recording a run to a directory (DESIGN §8): `trajectory.csv`, one binary scan log per
-//! sensor under `scans/`, `summary.json`, `path.png` and `run.mcap`.
+//! sensor under `scans/`, `summary.json`, `path.png`, `run.mcap`, and for each map built
+//! during the run (see [`Recorder::with_maps`]) `map_<name>.png`, `.pgm`, `.yaml` and `.npy`
+//! (see [`crate::map::export`]) with its scores in `summary.json`.
 //!
 //! `trajectory.csv` has one row per step:
 //! `time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped` — the true
@@ -21,11 +23,11 @@ use glam::DVec2;
 use serde::Serialize;
 use thiserror::Error;
 
+use crate::map::{MapError, MapScores, Mapper, export, score_maps};
 use crate::pose::Pose;
-use crate::render::{Figure, RenderError, save_png};
+use crate::render::{Figure, RenderError, save_png, world_region};
 use crate::scenario::{Robot, Scenario};
-use crate::sensor::Scan;
-use crate::sim::{Observer, RunSummary, Step};
+use crate::sim::{Observer, RunSummary, ScanEvent, Step};
 use crate::vehicle::VehicleSpec;
 use crate::world::World;
 
@@ -46,7 +48,13 @@ pub enum RecordError {
     /// The path figure failed.
     #[error(transparent)]
     Render(#[from] RenderError),
+    /// A map could not be written.
+    #[error(transparent)]
+    Map(#[from] MapError),
 }
+
+/// Simulated seconds between two map messages in the MCAP recording.
+pub const GRID_PERIOD: f64 = 1.0;
 
 /// What to record.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,6 +106,10 @@ pub struct Recorder {
     bumps: Vec<DVec2>,
     vehicle: &'static VehicleSpec,
     written: Vec<PathBuf>,
+    maps: Vec<Mapper>,
+    /// Time of the next map message in the MCAP.
+    #[cfg_attr(not(feature = "mcap"), allow(dead_code))]
+    next_grid: f64,
 }
 
 fn create(path: &Path) -> Result<Out, RecordError> {
@@ -164,19 +176,53 @@ impl Recorder {
             bumps: Vec::new(),
             vehicle: robot.vehicle,
             written,
+            maps: Vec::new(),
+            next_grid: 0.0,
         })
     }
 
-    /// Writes the summary and the path figure, closes every file and returns their paths.
+    /// Builds these maps during the run (each a [`Mapper`] of the recorded robot); they are
+    /// logged to the MCAP as they grow and written, with their scores, by
+    /// [`Recorder::finish`].
+    pub fn with_maps(mut self, maps: Vec<Mapper>) -> Result<Self, RecordError> {
+        #[cfg(feature = "mcap")]
+        if let Some(m) = &mut self.mcap {
+            for map in &maps {
+                m.add_map(map.name())?;
+            }
+        }
+        self.maps = maps;
+        Ok(self)
+    }
+
+    /// The maps being built.
+    pub fn maps(&self) -> &[Mapper] {
+        &self.maps
+    }
+
+    #[cfg(feature = "mcap")]
+    fn log_grids(&mut self, t: f64) -> Result<(), RecordError> {
+        if let Some(m) = &mut self.mcap {
+            for (i, map) in self.maps.iter().enumerate() {
+                m.grid(i, t, map.grid())?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the summary, the path figure and the maps, closes every file and says what
+    /// was written.
     pub fn finish(
         mut self,
         scenario: &Scenario,
         robot: &Robot,
         summary: &RunSummary,
         pixels: u32,
-    ) -> Result<Vec<PathBuf>, RecordError> {
+    ) -> Result<Recorded, RecordError> {
         let tpath = self.dir.join(files::TRAJECTORY);
         self.trajectory.flush().map_err(io_at(&tpath))?;
+        #[cfg(feature = "mcap")]
+        self.log_grids(summary.duration)?;
         for (path, log) in self.scan_logs {
             log.finish().map_err(io_at(&path))?;
             self.written.push(path);
@@ -211,10 +257,37 @@ impl Recorder {
             &png,
         )?;
         self.written.push(png);
+        let scores = score_maps(&scenario.world, robot.vehicle, &robot.start, &self.maps);
+        let mut maps = Vec::new();
+        for (m, scores) in self.maps.iter().zip(scores) {
+            let title = format!(
+                "{} - map `{}` ({} pose): {:.0}% of the hidden area clear",
+                scenario.name,
+                m.name(),
+                m.config().pose.as_str(),
+                100.0 * scores.hidden_coverage.unwrap_or(0.0)
+            );
+            let overlay = export::Overlay {
+                path: &truth,
+                robot: Some((robot.vehicle, robot.start, summary.final_pose)),
+                region: Some(world_region(&scenario.world)),
+            };
+            let stem = format!("map_{}", m.name());
+            self.written.extend(export::write_all(
+                m.grid(),
+                &self.dir,
+                &stem,
+                &title,
+                pixels,
+                &overlay,
+            )?);
+            maps.push(MapReport::new(m, stem, scores));
+        }
         let report = Report {
             scenario: &scenario.name,
             mission: scenario.mission.as_ref().map(|m| m.kind_name()),
             summary,
+            maps,
         };
         let spath = self.dir.join(files::SUMMARY);
         let mut json = serde_json::to_string_pretty(&report)
@@ -222,8 +295,24 @@ impl Recorder {
         json.push('\n');
         std::fs::write(&spath, json).map_err(io_at(&spath))?;
         self.written.push(spath);
-        Ok(self.written)
+        Ok(Recorded {
+            files: self.written,
+            maps: report
+                .maps
+                .iter()
+                .map(|m| (m.name.to_owned(), m.scores))
+                .collect(),
+        })
     }
+}
+
+/// What [`Recorder::finish`] wrote.
+#[derive(Clone, Debug)]
+pub struct Recorded {
+    /// Every file, in the order written.
+    pub files: Vec<PathBuf>,
+    /// Each map's name and scores.
+    pub maps: Vec<(String, MapScores)>,
 }
 
 #[derive(Serialize)]
@@ -232,12 +321,52 @@ struct Report<'a> {
     mission: Option<&'a str>,
     #[serde(flatten)]
     summary: &'a RunSummary,
+    maps: Vec<MapReport<'a>>,
+}
+
+/// A map's entry in `summary.json`.
+#[derive(Serialize)]
+struct MapReport<'a> {
+    name: &'a str,
+    files: String,
+    sensors: &'a [String],
+    pose: &'static str,
+    resolution: f64,
+    scans: u64,
+    columns: usize,
+    rows: usize,
+    origin: [f64; 2],
+    #[serde(flatten)]
+    scores: MapScores,
+}
+
+impl<'a> MapReport<'a> {
+    fn new(m: &'a Mapper, stem: String, scores: MapScores) -> Self {
+        let g = m.grid();
+        Self {
+            name: m.name(),
+            files: format!("{stem}.{{png,pgm,yaml,npy}}"),
+            sensors: m.sensor_names(),
+            pose: m.config().pose.as_str(),
+            resolution: g.resolution(),
+            scans: m.scans(),
+            columns: g.width(),
+            rows: g.height(),
+            origin: g.origin().to_array(),
+            scores,
+        }
+    }
 }
 
 impl Observer for Recorder {
     type Error = RecordError;
 
-    fn on_scan(&mut self, sensor: usize, scan: &Scan) -> Result<(), RecordError> {
+    fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), RecordError> {
+        let (sensor, scan) = (event.sensor, event.scan);
+        match self.maps.as_mut_slice().on_scan(event) {
+            Ok(()) => {}
+            Err(never) => match never {},
+        }
         if let Some((path, log)) = self.scan_logs.get_mut(sensor) {
             log.write(scan).map_err(io_at(path))?;
         }
@@ -249,6 +378,15 @@ impl Observer for Recorder {
     }
 
     fn on_step(&mut self, s: &Step) -> Result<(), RecordError> {
+        match self.maps.as_mut_slice().on_step(s) {
+            Ok(()) => {}
+            Err(never) => match never {},
+        }
+        #[cfg(feature = "mcap")]
+        if s.time >= self.next_grid {
+            self.log_grids(s.time)?;
+            self.next_grid += GRID_PERIOD;
+        }
         let (t, o) = (&s.truth, &s.odometry);
         let (left, right) = self.vehicle.tracks(s.command);
         // Straight into the buffered file: no string per step.

@@ -76,12 +76,27 @@ pub struct Step {
     pub bumped: bool,
 }
 
-/// Receives what happens in a run, in time order (a recorder, a progress bar, a test).
+/// A scan as observers receive it, with the robot's pose at the scan's time.
+#[derive(Clone, Copy, Debug)]
+pub struct ScanEvent<'a> {
+    /// Index of the sensor in the robot's sensors.
+    pub sensor: usize,
+    /// The scan; its `pose` is the true sensor pose.
+    pub scan: &'a Scan,
+    /// True robot pose at the scan's time.
+    pub truth: Pose,
+    /// Odometry estimate of the robot pose at the scan's time. Inside a step it is the
+    /// estimate at the step's start moved by the executed command (the step's noise is drawn
+    /// once, at its end).
+    pub odometry: Pose,
+}
+
+/// Receives what happens in a run, in time order (a recorder, a mapper, a progress bar).
 pub trait Observer {
     /// Error that ends the run.
     type Error;
-    /// A scan was taken by sensor `sensor` (index into the robot's sensors).
-    fn on_scan(&mut self, _sensor: usize, _scan: &Scan) -> Result<(), Self::Error> {
+    /// A scan was taken.
+    fn on_scan(&mut self, _event: &ScanEvent<'_>) -> Result<(), Self::Error> {
         Ok(())
     }
     /// A step was taken.
@@ -96,6 +111,40 @@ pub struct NoObserver;
 
 impl Observer for NoObserver {
     type Error = std::convert::Infallible;
+}
+
+/// Both observers, first `.0` then `.1`; their errors must convert into one type.
+impl<A: Observer, B: Observer<Error = A::Error>> Observer for (A, B) {
+    type Error = A::Error;
+    fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), Self::Error> {
+        self.0.on_scan(event)?;
+        self.1.on_scan(event)
+    }
+    fn on_step(&mut self, step: &Step) -> Result<(), Self::Error> {
+        self.0.on_step(step)?;
+        self.1.on_step(step)
+    }
+}
+
+/// Every observer of the slice, in order.
+impl<O: Observer> Observer for [O] {
+    type Error = O::Error;
+    fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), Self::Error> {
+        self.iter_mut().try_for_each(|o| o.on_scan(event))
+    }
+    fn on_step(&mut self, step: &Step) -> Result<(), Self::Error> {
+        self.iter_mut().try_for_each(|o| o.on_step(step))
+    }
+}
+
+impl<O: Observer + ?Sized> Observer for &mut O {
+    type Error = O::Error;
+    fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), Self::Error> {
+        (**self).on_scan(event)
+    }
+    fn on_step(&mut self, step: &Step) -> Result<(), Self::Error> {
+        (**self).on_step(step)
+    }
 }
 
 /// A run that cannot start.
@@ -273,8 +322,9 @@ impl<'a> Simulation<'a> {
         let t = self.time();
         let dt = self.settings.dt;
         let start = self.truth;
+        let odo_start = self.odometry.pose;
         // 1. Scans due now see the pose at the start of the step.
-        self.fire_sensors(t + TIME_EPS, |_| start, observer)?;
+        self.fire_sensors(t + TIME_EPS, |_| (start, odo_start), observer)?;
         // 2. Controller.
         let rate = self.controller.rate_hz();
         if self.next_control as f64 / rate <= t + TIME_EPS {
@@ -322,7 +372,13 @@ impl<'a> Simulation<'a> {
         // 4. Scans inside the step, on the arc.
         self.fire_sensors(
             t + dt - TIME_EPS,
-            |s| integrate(&start, executed, (s - t).max(0.0)),
+            |s| {
+                let ds = (s - t).max(0.0);
+                (
+                    integrate(&start, executed, ds),
+                    integrate(&odo_start, executed, ds),
+                )
+            },
             observer,
         )?;
         // 5. Move.
@@ -339,7 +395,7 @@ impl<'a> Simulation<'a> {
     fn fire_sensors<O: Observer>(
         &mut self,
         until: f64,
-        pose_at: impl Fn(f64) -> Pose,
+        pose_at: impl Fn(f64) -> (Pose, Pose),
         observer: &mut O,
     ) -> Result<(), O::Error> {
         loop {
@@ -356,7 +412,8 @@ impl<'a> Simulation<'a> {
                 return Ok(());
             };
             let sensor = &self.robot.sensors[i];
-            let sensor_pose = pose_at(when).compose(&sensor.mount);
+            let (truth, odometry) = pose_at(when);
+            let sensor_pose = truth.compose(&sensor.mount);
             let scan = sensor.config.scan(
                 self.world,
                 &sensor_pose,
@@ -365,7 +422,12 @@ impl<'a> Simulation<'a> {
                 &mut self.tracer,
             );
             self.next_scan[i] += 1;
-            observer.on_scan(i, &scan)?;
+            observer.on_scan(&ScanEvent {
+                sensor: i,
+                scan: &scan,
+                truth,
+                odometry,
+            })?;
             self.latest[i] = Some(scan);
         }
     }

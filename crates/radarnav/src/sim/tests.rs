@@ -78,13 +78,16 @@ fn settings(s: &Scenario, duration: f64) -> RunSettings {
 #[derive(Default)]
 struct Log {
     scans: Vec<(usize, f64, Pose)>,
+    /// (truth, odometry) of the robot at each scan.
+    odometry: Vec<(Pose, Pose)>,
     steps: Vec<Step>,
 }
 
 impl Observer for Log {
     type Error = std::convert::Infallible;
-    fn on_scan(&mut self, i: usize, s: &Scan) -> Result<(), Self::Error> {
-        self.scans.push((i, s.stamp, s.pose));
+    fn on_scan(&mut self, e: &ScanEvent<'_>) -> Result<(), Self::Error> {
+        self.scans.push((e.sensor, e.scan.stamp, e.scan.pose));
+        self.odometry.push((e.truth, e.odometry));
         Ok(())
     }
     fn on_step(&mut self, s: &Step) -> Result<(), Self::Error> {
@@ -123,6 +126,13 @@ fn sensor_rates_are_honoured() {
     let cmd = robot.vehicle.limit(DriveCommand::twist(0.3, 0.2));
     let expect = integrate(&robot.start, cmd, 0.025).compose(&robot.sensors[1].mount);
     assert!((mid.2.x - expect.x).abs() < 1e-12 && (mid.2.yaw - expect.yaw).abs() < 1e-12);
+    // Each event carries the robot pose at the scan's time; the room's odometry is noiseless,
+    // so its estimate is the truth there too.
+    for ((i, _, pose), (truth, odo)) in log.scans.iter().zip(&log.odometry) {
+        let p = truth.compose(&robot.sensors[*i].mount);
+        assert!((p.x - pose.x).abs() < 1e-12 && (p.y - pose.y).abs() < 1e-12);
+        assert!((odo.x - truth.x).abs() < 1e-9 && (odo.yaw - truth.yaw).abs() < 1e-9);
+    }
 }
 
 #[test]

@@ -1,0 +1,538 @@
+//! The two-layer log-odds occupancy grid (DESIGN §5).
+//!
+//! Layer `sensed` records what the sensors saw: cells a ray passed through become freer, the
+//! cell of a return more occupied. Layer `passable` records what the robot may drive on:
+//! returns of every sensor and bumps make it more occupied, only rays that stop at the first
+//! thing in their way (laser, ground truth) and the robot's own footprint make it freer. A
+//! radar ray that crosses foliage therefore clears `sensed` there but not `passable`.
+
+use glam::DVec2;
+use serde::Serialize;
+
+use super::walk::{CellIndex, CellWalk, cell_of};
+
+/// `ln(p / (1 - p))`.
+pub fn logit(p: f64) -> f32 {
+    (p / (1.0 - p)).ln() as f32
+}
+
+/// Log-odds update and classification settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Occupancy {
+    /// Probability a return gives its cell (update `logit(hit)`).
+    pub hit: f64,
+    /// Probability a ray passing through gives a cell (update `logit(miss)`).
+    pub miss: f64,
+    /// Lower clamp of a cell's probability, so a cell can change its mind.
+    pub min: f64,
+    /// Upper clamp.
+    pub max: f64,
+    /// Above this a cell is occupied (ROS `map_server` `occupied_thresh`).
+    pub occupied_thresh: f64,
+    /// Below this a cell is free (ROS `map_server` `free_thresh`).
+    pub free_thresh: f64,
+}
+
+impl Default for Occupancy {
+    /// One return makes a cell occupied (0.7 > 0.65); four rays through it make it free
+    /// (0.4⁴ odds: p = 0.165 < 0.196). Clamped to [0.12, 0.97], so a cell changes its mind
+    /// after a bounded number of contrary scans (8 misses un-occupy a saturated cell).
+    fn default() -> Self {
+        Self {
+            hit: 0.7,
+            miss: 0.4,
+            min: 0.12,
+            max: 0.97,
+            occupied_thresh: 0.65,
+            free_thresh: 0.196,
+        }
+    }
+}
+
+impl Occupancy {
+    /// Checks the probabilities are ordered and inside (0, 1).
+    pub fn validate(&self) -> Result<(), String> {
+        let open = |p: f64| p > 0.0 && p < 1.0;
+        if !(open(self.min) && open(self.max) && open(self.hit) && open(self.miss)) {
+            return Err("probabilities must lie strictly between 0 and 1".into());
+        }
+        if !(self.miss < 0.5 && self.hit > 0.5) {
+            return Err(format!(
+                "need miss < 0.5 < hit, found miss {} and hit {}",
+                self.miss, self.hit
+            ));
+        }
+        if !(self.min < self.free_thresh
+            && self.free_thresh <= self.occupied_thresh
+            && self.occupied_thresh < self.max)
+        {
+            return Err(format!(
+                "need min < free_thresh <= occupied_thresh < max, found {} {} {} {}",
+                self.min, self.free_thresh, self.occupied_thresh, self.max
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What a map says about a cell, in the thesis' palette (its figure 15).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+#[repr(u8)]
+pub enum CellClass {
+    /// No evidence either way (blue).
+    Unknown = 0,
+    /// Clear to the sensor and not known to block the robot (white).
+    Clear = 1,
+    /// Seen through by the sensor but not passable: foliage (grey).
+    SeeThrough = 2,
+    /// A return, or known to block the robot (black).
+    Obstacle = 3,
+}
+
+impl CellClass {
+    /// Every class, by code.
+    pub const ALL: [CellClass; 4] = [
+        CellClass::Unknown,
+        CellClass::Clear,
+        CellClass::SeeThrough,
+        CellClass::Obstacle,
+    ];
+
+    /// The thesis' colour.
+    pub fn rgb(self) -> [u8; 3] {
+        match self {
+            Self::Unknown => [70, 110, 200],
+            Self::Clear => [255, 255, 255],
+            Self::SeeThrough => [150, 150, 150],
+            Self::Obstacle => [0, 0, 0],
+        }
+    }
+
+    /// Legend text.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Unknown => "unknown",
+            Self::Clear => "sensor-clear",
+            Self::SeeThrough => "seen through, impassable",
+            Self::Obstacle => "obstacle",
+        }
+    }
+
+    /// Whether the sensor saw through the cell (white or grey).
+    pub fn sensor_clear(self) -> bool {
+        matches!(self, Self::Clear | Self::SeeThrough)
+    }
+
+    /// Whether the robot should not drive into the cell (grey or black).
+    pub fn blocks(self) -> bool {
+        matches!(self, Self::SeeThrough | Self::Obstacle)
+    }
+}
+
+/// Which layers an update touches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layers {
+    /// Both `sensed` and `passable`.
+    Both,
+    /// Only `sensed`.
+    Sensed,
+    /// Only `passable`.
+    Passable,
+}
+
+impl Layers {
+    fn sensed(self) -> bool {
+        self != Self::Passable
+    }
+    fn passable(self) -> bool {
+        self != Self::Sensed
+    }
+}
+
+/// One ray of an update, in the plane: from the sensor to where it ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Beam {
+    /// Sensor position.
+    pub from: DVec2,
+    /// End of the ray: the return, or where free space stops being claimed.
+    pub to: DVec2,
+    /// Whether `to` is a return (its cell gets the hit).
+    pub hit: bool,
+}
+
+/// Cells added around the needed extent when the grid grows, so growth is rare.
+const GROW_PAD: i64 = 64;
+
+/// A growing two-layer occupancy grid. Row 0 is the southern-most (lowest y) row.
+#[derive(Clone, Debug)]
+pub struct Grid {
+    resolution: f64,
+    occupancy: Occupancy,
+    l_hit: f32,
+    l_miss: f32,
+    l_min: f32,
+    l_max: f32,
+    /// Global index of column 0 and row 0.
+    origin: CellIndex,
+    width: usize,
+    height: usize,
+    sensed: Vec<f32>,
+    passable: Vec<f32>,
+    /// Number of the last update that touched each cell: a cell changes once per update.
+    mark: Vec<u32>,
+    updates: u32,
+}
+
+impl Grid {
+    /// An empty grid of `resolution`-metre cells.
+    pub fn new(resolution: f64, occupancy: Occupancy) -> Self {
+        let l = |p| logit(p);
+        Self {
+            resolution,
+            occupancy,
+            l_hit: l(occupancy.hit),
+            l_miss: l(occupancy.miss),
+            l_min: l(occupancy.min),
+            l_max: l(occupancy.max),
+            origin: (0, 0),
+            width: 0,
+            height: 0,
+            sensed: Vec::new(),
+            passable: Vec::new(),
+            mark: Vec::new(),
+            updates: 0,
+        }
+    }
+
+    /// Cell size, m.
+    pub fn resolution(&self) -> f64 {
+        self.resolution
+    }
+
+    /// The update and classification settings.
+    pub fn occupancy(&self) -> &Occupancy {
+        &self.occupancy
+    }
+
+    /// Columns.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Rows.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Global index of cell (0, 0).
+    pub fn origin_cell(&self) -> CellIndex {
+        self.origin
+    }
+
+    /// World position of the lower-left corner of cell (0, 0), m.
+    pub fn origin(&self) -> DVec2 {
+        DVec2::new(self.origin.0 as f64, self.origin.1 as f64) * self.resolution
+    }
+
+    /// Log-odds of layer `sensed`, row by row from row 0.
+    pub fn sensed(&self) -> &[f32] {
+        &self.sensed
+    }
+
+    /// Log-odds of layer `passable`, row by row from row 0.
+    pub fn passable(&self) -> &[f32] {
+        &self.passable
+    }
+
+    /// The storage index of a global cell, `None` outside the grid.
+    pub fn index(&self, c: CellIndex) -> Option<usize> {
+        let (i, j) = (c.0 - self.origin.0, c.1 - self.origin.1);
+        (i >= 0 && j >= 0 && (i as usize) < self.width && (j as usize) < self.height)
+            .then(|| j as usize * self.width + i as usize)
+    }
+
+    /// The global cell holding world point `p`.
+    pub fn cell_of(&self, p: DVec2) -> CellIndex {
+        cell_of(p, self.resolution)
+    }
+
+    /// Log-odds (sensed, passable) of a global cell; 0 outside the grid.
+    pub fn log_odds(&self, c: CellIndex) -> (f32, f32) {
+        self.index(c)
+            .map_or((0.0, 0.0), |k| (self.sensed[k], self.passable[k]))
+    }
+
+    /// The class of a global cell (unknown outside the grid).
+    pub fn class(&self, c: CellIndex) -> CellClass {
+        self.index(c)
+            .map_or(CellClass::Unknown, |k| self.class_at(k))
+    }
+
+    /// The class of storage index `k`.
+    pub fn class_at(&self, k: usize) -> CellClass {
+        let occ = logit(self.occupancy.occupied_thresh);
+        let free = logit(self.occupancy.free_thresh);
+        let (s, p) = (self.sensed[k], self.passable[k]);
+        if p > occ {
+            if s < free {
+                CellClass::SeeThrough
+            } else {
+                CellClass::Obstacle
+            }
+        } else if s > occ {
+            CellClass::Obstacle
+        } else if s < free || p < free {
+            CellClass::Clear
+        } else {
+            CellClass::Unknown
+        }
+    }
+
+    /// The class of every cell, row by row from row 0.
+    pub fn classes(&self) -> Vec<CellClass> {
+        (0..self.sensed.len()).map(|k| self.class_at(k)).collect()
+    }
+
+    /// Grows the grid (keeping its contents) so that it holds cells `lo..=hi`.
+    pub fn ensure(&mut self, lo: CellIndex, hi: CellIndex) {
+        let (x0, y0) = self.origin;
+        let (x1, y1) = (x0 + self.width as i64, y0 + self.height as i64);
+        if self.width > 0 && lo.0 >= x0 && lo.1 >= y0 && hi.0 < x1 && hi.1 < y1 {
+            return;
+        }
+        let (nx0, ny0, nx1, ny1) = if self.width == 0 {
+            (
+                lo.0 - GROW_PAD,
+                lo.1 - GROW_PAD,
+                hi.0 + GROW_PAD + 1,
+                hi.1 + GROW_PAD + 1,
+            )
+        } else {
+            let pad = |need: bool| if need { GROW_PAD } else { 0 };
+            (
+                lo.0.min(x0) - pad(lo.0 < x0),
+                lo.1.min(y0) - pad(lo.1 < y0),
+                (hi.0 + 1).max(x1) + pad(hi.0 >= x1),
+                (hi.1 + 1).max(y1) + pad(hi.1 >= y1),
+            )
+        };
+        let (w, h) = ((nx1 - nx0) as usize, (ny1 - ny0) as usize);
+        let mut sensed = vec![0.0; w * h];
+        let mut passable = vec![0.0; w * h];
+        let mut mark = vec![0; w * h];
+        for row in 0..self.height {
+            let src = row * self.width;
+            let dst = (row as i64 + y0 - ny0) as usize * w + (x0 - nx0) as usize;
+            sensed[dst..dst + self.width].copy_from_slice(&self.sensed[src..src + self.width]);
+            passable[dst..dst + self.width].copy_from_slice(&self.passable[src..src + self.width]);
+            mark[dst..dst + self.width].copy_from_slice(&self.mark[src..src + self.width]);
+        }
+        self.origin = (nx0, ny0);
+        (self.width, self.height) = (w, h);
+        (self.sensed, self.passable, self.mark) = (sensed, passable, mark);
+    }
+
+    /// Starts an update: every cell changes at most once until the next one, as in
+    /// Cartographer's range-data inserter, so a dense scan counts as much as a sparse one.
+    fn begin(&mut self) -> u32 {
+        self.updates = self.updates.wrapping_add(1);
+        if self.updates == 0 {
+            self.mark.fill(0);
+            self.updates = 1;
+        }
+        self.updates
+    }
+
+    fn apply(&mut self, k: usize, delta: f32, layers: Layers) {
+        let (lo, hi) = (self.l_min, self.l_max);
+        if layers.sensed() {
+            self.sensed[k] = (self.sensed[k] + delta).clamp(lo, hi);
+        }
+        if layers.passable() {
+            self.passable[k] = (self.passable[k] + delta).clamp(lo, hi);
+        }
+    }
+
+    /// Inserts one scan: the cell of every return gets a hit in both layers; every other cell
+    /// a ray passes through gets one miss in `sensed`, and in `passable` too when
+    /// `misses_clear_passable` (the sensor stops at the first thing in its way).
+    pub fn insert(&mut self, beams: &[Beam], misses_clear_passable: bool) {
+        if beams.is_empty() {
+            return;
+        }
+        let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
+        for b in beams {
+            for c in [self.cell_of(b.from), self.cell_of(b.to)] {
+                lo = (lo.0.min(c.0), lo.1.min(c.1));
+                hi = (hi.0.max(c.0), hi.1.max(c.1));
+            }
+        }
+        self.ensure(lo, hi);
+        let stamp = self.begin();
+        // Hits first, so that no ray of this scan frees a cell another one ended in.
+        for b in beams.iter().filter(|b| b.hit) {
+            let Some(k) = self.index(self.cell_of(b.to)) else {
+                continue;
+            };
+            if self.mark[k] != stamp {
+                self.mark[k] = stamp;
+                self.apply(k, self.l_hit, Layers::Both);
+            }
+        }
+        let layers = if misses_clear_passable {
+            Layers::Both
+        } else {
+            Layers::Sensed
+        };
+        for b in beams {
+            let walk = CellWalk::new(b.from, b.to, self.resolution);
+            let n = walk.len();
+            for (step, c) in walk.enumerate() {
+                if b.hit && step + 1 == n {
+                    break;
+                }
+                let Some(k) = self.index(c) else { continue };
+                if self.mark[k] != stamp {
+                    self.mark[k] = stamp;
+                    self.apply(k, self.l_miss, layers);
+                }
+            }
+        }
+    }
+
+    /// One update of `layers` on `cells`: a hit (`occupied`) or a miss, once per cell.
+    pub fn mark_cells(
+        &mut self,
+        cells: impl IntoIterator<Item = CellIndex>,
+        occupied: bool,
+        layers: Layers,
+    ) {
+        let cells: Vec<CellIndex> = cells.into_iter().collect();
+        let Some(&first) = cells.first() else {
+            return;
+        };
+        let (lo, hi) = cells.iter().fold((first, first), |(lo, hi), c| {
+            (
+                (lo.0.min(c.0), lo.1.min(c.1)),
+                (hi.0.max(c.0), hi.1.max(c.1)),
+            )
+        });
+        self.ensure(lo, hi);
+        let stamp = self.begin();
+        let delta = if occupied { self.l_hit } else { self.l_miss };
+        for c in cells {
+            if let Some(k) = self.index(c)
+                && self.mark[k] != stamp
+            {
+                self.mark[k] = stamp;
+                self.apply(k, delta, layers);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid() -> Grid {
+        Grid::new(0.1, Occupancy::default())
+    }
+
+    #[test]
+    fn one_ray_frees_its_path_and_hits_its_end() {
+        let mut g = grid();
+        let beam = Beam {
+            from: DVec2::new(0.05, 0.05),
+            to: DVec2::new(0.55, 0.05),
+            hit: true,
+        };
+        g.insert(&[beam], true);
+        let (h, m) = (logit(0.7), logit(0.4));
+        for i in 0..5 {
+            assert_eq!(g.log_odds((i, 0)), (m, m), "cell {i}");
+        }
+        assert_eq!(g.log_odds((5, 0)), (h, h));
+        assert_eq!(g.log_odds((6, 0)), (0.0, 0.0));
+        assert_eq!(g.class((5, 0)), CellClass::Obstacle);
+        // A radar-like ray frees only the sensed layer.
+        let mut g = grid();
+        g.insert(&[beam], false);
+        assert_eq!(g.log_odds((2, 0)), (m, 0.0));
+    }
+
+    #[test]
+    fn a_cell_changes_once_per_scan_and_hits_win() {
+        let mut g = grid();
+        let through = Beam {
+            from: DVec2::new(0.05, 0.05),
+            to: DVec2::new(0.95, 0.05),
+            hit: true,
+        };
+        let ends = Beam {
+            to: DVec2::new(0.45, 0.05),
+            ..through
+        };
+        g.insert(&[through, through, ends], true);
+        assert_eq!(g.log_odds((4, 0)).0, logit(0.7), "ended in, though crossed");
+        assert_eq!(
+            g.log_odds((2, 0)).0,
+            logit(0.4),
+            "crossed by three, counted once"
+        );
+    }
+
+    #[test]
+    fn clamping_and_classes() {
+        let mut g = grid();
+        let c = (3, -2);
+        for _ in 0..20 {
+            g.mark_cells([c], true, Layers::Both);
+        }
+        assert_eq!(g.log_odds(c).0, logit(0.97));
+        for _ in 0..3 {
+            g.mark_cells([c], false, Layers::Sensed);
+        }
+        // Sensed is no longer occupied, passable still is.
+        assert_eq!(g.class(c), CellClass::Obstacle);
+        for _ in 0..10 {
+            g.mark_cells([c], false, Layers::Sensed);
+        }
+        assert_eq!(g.class(c), CellClass::SeeThrough);
+        for _ in 0..20 {
+            g.mark_cells([c], false, Layers::Passable);
+        }
+        assert_eq!(g.class(c), CellClass::Clear);
+        assert_eq!(g.class((100, 100)), CellClass::Unknown);
+    }
+
+    #[test]
+    fn growing_keeps_contents() {
+        let mut g = grid();
+        g.mark_cells([(0, 0)], true, Layers::Both);
+        let before = g.log_odds((0, 0));
+        g.mark_cells([(-500, 300)], true, Layers::Sensed);
+        g.mark_cells([(700, -40)], false, Layers::Passable);
+        assert_eq!(g.log_odds((0, 0)), before);
+        assert!(g.index((-500, 300)).is_some() && g.index((700, -40)).is_some());
+        assert_eq!(g.log_odds((-500, 300)), (logit(0.7), 0.0));
+        assert_eq!(g.log_odds((700, -40)), (0.0, logit(0.4)));
+        assert_eq!(g.width() * g.height(), g.sensed().len());
+    }
+
+    #[test]
+    fn default_occupancy_is_valid_and_bad_ones_are_refused() {
+        assert!(Occupancy::default().validate().is_ok());
+        let bad = Occupancy {
+            hit: 0.4,
+            ..Occupancy::default()
+        };
+        assert!(bad.validate().is_err());
+        let bad = Occupancy {
+            free_thresh: 0.7,
+            ..Occupancy::default()
+        };
+        assert!(bad.validate().is_err());
+    }
+}
