@@ -121,6 +121,9 @@ enum Command {
         /// Map cell size, metres.
         #[arg(long, default_value_t = 0.05)]
         map_resolution: f64,
+        /// A ray with no return frees map cells up to this range, metres.
+        #[arg(long, default_value_t = 10.0)]
+        map_max_free_range: f64,
     },
     /// Time scans of every sensor of a scenario's first robot; prints rays per second.
     /// With --sim, time a whole simulated run instead.
@@ -233,6 +236,7 @@ fn run(cli: Cli) -> Result<()> {
             no_maps,
             map_pose,
             map_resolution,
+            map_max_free_range,
         } => {
             let s = load(&scenario)?;
             let base = Path::new(&scenario)
@@ -252,6 +256,7 @@ fn run(cli: Cli) -> Result<()> {
                 maps: (!no_maps).then_some(maps.as_slice()),
                 map_pose: &map_pose,
                 map_resolution,
+                map_max_free_range,
             })
         }
         Command::Bench {

@@ -156,6 +156,7 @@ pub struct RunArgs<'a> {
     pub maps: Option<&'a [String]>,
     pub map_pose: &'a str,
     pub map_resolution: f64,
+    pub map_max_free_range: f64,
 }
 
 /// The mappers `run` builds.
@@ -171,6 +172,7 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<Vec<Mapper>> {
     })?;
     let config = MapConfig {
         resolution: a.map_resolution,
+        max_free_range: a.map_max_free_range,
         pose,
         ..MapConfig::default()
     };

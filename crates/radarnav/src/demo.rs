@@ -376,14 +376,6 @@ mod tests {
             ("radar", PoseSource::Odometry),
         ];
         let e = mapping_experiment(&s, 1, &maps, 0.05).unwrap();
-        for m in &e.maps {
-            eprintln!(
-                "{} {:?}: {:?}",
-                m.mapper.name(),
-                m.mapper.config().pose,
-                m.scores
-            );
-        }
         let (radar, laser) = (&e.maps[0].scores, &e.maps[1].scores);
         assert_eq!(laser.hidden_coverage, Some(0.0));
         assert!(radar.hidden_coverage.unwrap() > 0.1, "{radar:?}");
@@ -391,6 +383,14 @@ mod tests {
         assert!(laser.free_precision.unwrap() > 0.95, "{laser:?}");
         assert!(laser.obstacle_precision.unwrap() > 0.8, "{laser:?}");
         assert_eq!(e.summary.bumps, 0);
+        // The odometry drifts, so the same scans placed by it draw blurred obstacles.
+        let drifted = &e.maps[2].scores;
+        assert!(
+            drifted.obstacle_precision.unwrap() < radar.obstacle_precision.unwrap() - 0.05,
+            "{drifted:?}"
+        );
+        assert_eq!(e.maps[0].mapper.scans(), 139);
+        assert_eq!(e.maps[1].mapper.scans(), 1389);
     }
 
     #[test]

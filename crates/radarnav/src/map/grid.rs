@@ -385,14 +385,13 @@ impl Grid {
         } else {
             Layers::Sensed
         };
+        let ((ox, oy), w) = (self.origin, self.width as i64);
         for b in beams {
             let walk = CellWalk::new(b.from, b.to, self.resolution);
-            let n = walk.len();
-            for (step, c) in walk.enumerate() {
-                if b.hit && step + 1 == n {
-                    break;
-                }
-                let Some(k) = self.index(c) else { continue };
+            let n = walk.len() - usize::from(b.hit);
+            for (i, j) in walk.take(n) {
+                // Inside the grid: `ensure` covered both ends, so the whole segment.
+                let k = ((j - oy) * w + (i - ox)) as usize;
                 if self.mark[k] != stamp {
                     self.mark[k] = stamp;
                     self.apply(k, self.l_miss, layers);

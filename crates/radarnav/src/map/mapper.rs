@@ -358,6 +358,11 @@ mod tests {
         name = "radar"
         preset = "radar_thesis"
         mount = { z = 0.4 }
+        [[robot.sensor]]
+        name = "tilted"
+        preset = "hokuyo_utm30lx"
+        elevations_deg = [-30.0, 0.0]
+        mount = { z = 0.4 }
     "#;
 
     fn scan_of(s: &Scenario, sensor: &str) -> (Scan, Pose) {
@@ -447,10 +452,34 @@ mod tests {
     }
 
     #[test]
+    fn ground_returns_of_a_tilted_plane_are_not_obstacles() {
+        let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
+        let mut m = Mapper::from_spec("tilted", &s.robots[0], MapConfig::default()).unwrap();
+        let (scan, pose) = scan_of(&s, "tilted");
+        m.insert_scan(&scan, &pose);
+        let g = m.grid();
+        // The -30° plane meets the ground 0.4 / tan 30° = 0.69 m out: free up to there, no
+        // hit; the level plane hits the walls, projected as they are.
+        let (hit, miss) = (logit(0.7), logit(0.4));
+        assert_eq!(
+            g.log_odds((13, 0)).0,
+            miss,
+            "ground at 0.69 m is not an obstacle"
+        );
+        assert_eq!(g.log_odds((40, 0)).0, hit);
+        // Every hit is at a wall face (within the laser's noise), none on the floor between.
+        let (w, (oi, oj)) = (g.width(), g.origin_cell());
+        for (k, _) in g.sensed().iter().enumerate().filter(|(_, l)| **l > 0.0) {
+            let (i, j) = (oi + (k % w) as i64, oj + (k / w) as i64);
+            assert!(i.abs() >= 38 || j.abs() >= 38, "hit at ({i}, {j})");
+        }
+    }
+
+    #[test]
     fn unknown_sensor_and_bad_config_are_errors() {
         let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
         let e = Mapper::from_spec("radar+sonar", &s.robots[0], MapConfig::default()).unwrap_err();
-        assert!(e.to_string().contains("sonar") && e.to_string().contains("laser, radar"));
+        assert!(e.to_string().contains("sonar") && e.to_string().contains("laser, radar, tilted"));
         let bad = MapConfig {
             resolution: 0.0,
             ..MapConfig::default()
