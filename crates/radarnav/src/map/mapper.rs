@@ -54,6 +54,9 @@ pub struct MapConfig {
     /// A ray with no return (`+inf`) frees cells up to this range (or the sensor's
     /// `range_max`, if shorter), m; it marks no hit.
     pub max_free_range: f64,
+    /// Returns farther than this are not taken as hits but as no return (free up to
+    /// `max_free_range`): far, grazing returns are unreliable and would grow the grid, m.
+    pub max_range: f64,
     /// Returns lower than this above the ground are taken as the ground, not an obstacle
     /// (only tilted scan planes reach it), m.
     pub ground_clearance: f64,
@@ -70,6 +73,7 @@ impl Default for MapConfig {
             resolution: 0.05,
             pose: PoseSource::Truth,
             max_free_range: 10.0,
+            max_range: 50.0,
             ground_clearance: 0.05,
             body: true,
             occupancy: Occupancy::default(),
@@ -91,6 +95,12 @@ impl MapConfig {
             return bad(format!(
                 "max_free_range must be a finite number >= 0, found {}",
                 self.max_free_range
+            ));
+        }
+        if !(self.max_range > 0.0) {
+            return bad(format!(
+                "max_range must be a number > 0, found {}",
+                self.max_range
             ));
         }
         if !self.ground_clearance.is_finite() {
@@ -218,9 +228,9 @@ impl Mapper {
             let dir = DVec2::new(c, s);
             let (se, ce) = el.sin_cos();
             let r = f64::from(r);
-            let (reach, hit) = if r.is_finite() {
+            let (reach, hit) = if r.is_finite() && r <= self.config.max_range {
                 (r, sensor_pose.z + r * se >= self.config.ground_clearance)
-            } else if r == f64::INFINITY {
+            } else if r == f64::INFINITY || r > self.config.max_range {
                 (free_reach, false)
             } else {
                 continue; // closer than range_min, or not a number: no information
@@ -443,6 +453,8 @@ mod tests {
         let (mut scan, pose) = scan_of(&s, "laser");
         scan.ranges.fill(f32::INFINITY);
         scan.ranges[0] = f32::NEG_INFINITY;
+        // Beyond max_range (50 m): no hit, like no return.
+        scan.ranges[100] = 60.0;
         m.insert_scan(&scan, &pose);
         let g = m.grid();
         assert!(g.sensed().iter().all(|&l| l <= 0.0), "no hit anywhere");
