@@ -97,7 +97,7 @@ impl MapConfig {
                 self.max_free_range
             ));
         }
-        if !(self.max_range > 0.0) {
+        if self.max_range.is_nan() || self.max_range <= 0.0 {
             return bad(format!(
                 "max_range must be a number > 0, found {}",
                 self.max_range
