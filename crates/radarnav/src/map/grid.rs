@@ -173,6 +173,9 @@ pub struct Grid {
     l_miss: f32,
     l_min: f32,
     l_max: f32,
+    /// Log-odds of `occupied_thresh` and `free_thresh`.
+    l_occupied: f32,
+    l_free: f32,
     /// Global index of column 0 and row 0.
     origin: CellIndex,
     width: usize,
@@ -195,6 +198,8 @@ impl Grid {
             l_miss: l(occupancy.miss),
             l_min: l(occupancy.min),
             l_max: l(occupancy.max),
+            l_occupied: l(occupancy.occupied_thresh),
+            l_free: l(occupancy.free_thresh),
             origin: (0, 0),
             width: 0,
             height: 0,
@@ -271,8 +276,7 @@ impl Grid {
 
     /// The class of storage index `k`.
     pub fn class_at(&self, k: usize) -> CellClass {
-        let occ = logit(self.occupancy.occupied_thresh);
-        let free = logit(self.occupancy.free_thresh);
+        let (occ, free) = (self.l_occupied, self.l_free);
         let (s, p) = (self.sensed[k], self.passable[k]);
         if p > occ {
             if s < free {

@@ -260,12 +260,15 @@ impl Recorder {
         let scores = score_maps(&scenario.world, robot.vehicle, &robot.start, &self.maps);
         let mut maps = Vec::new();
         for (m, scores) in self.maps.iter().zip(scores) {
+            let hidden = scores.hidden_coverage.map_or_else(
+                || "no hidden area".to_owned(),
+                |c| format!("{:.0}% of the hidden area clear", 100.0 * c),
+            );
             let title = format!(
-                "{} - map `{}` ({} pose): {:.0}% of the hidden area clear",
+                "{} - map `{}` ({} pose): {hidden}",
                 scenario.name,
                 m.name(),
                 m.config().pose.as_str(),
-                100.0 * scores.hidden_coverage.unwrap_or(0.0)
             );
             let overlay = export::Overlay {
                 path: &truth,
