@@ -113,7 +113,7 @@ impl Observer for NoObserver {
     type Error = std::convert::Infallible;
 }
 
-/// Both observers, first `.0` then `.1`; their errors must convert into one type.
+/// Both observers, first `.0` then `.1`; they share one error type.
 impl<A: Observer, B: Observer<Error = A::Error>> Observer for (A, B) {
     type Error = A::Error;
     fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), Self::Error> {
