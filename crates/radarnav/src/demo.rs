@@ -13,6 +13,7 @@ use thiserror::Error;
 use tiny_skia::Pixmap;
 
 use crate::map::{MapConfig, MapError, MapScores, Mapper, PoseSource, score_maps};
+use crate::record::Trail;
 use crate::render::{Figure, RenderError};
 use crate::scenario::Scenario;
 use crate::sensor::{Scan, SensorConfig, Tracer, preset};
@@ -220,15 +221,12 @@ pub struct MappingExperiment {
 
 /// Collects the true path of a run.
 #[derive(Default)]
-struct PathLog(Vec<glam::DVec2>);
+struct PathLog(Trail);
 
 impl Observer for PathLog {
     type Error = std::convert::Infallible;
     fn on_step(&mut self, s: &Step) -> Result<(), Self::Error> {
-        let p = s.truth.xy();
-        if self.0.last().is_none_or(|l| l.distance_squared(p) >= 1e-4) {
-            self.0.push(p);
-        }
+        self.0.push(&s.truth);
         Ok(())
     }
 }
@@ -271,7 +269,7 @@ pub fn mapping_experiment(
         Ok(s) => s,
         Err(never) => match never {},
     };
-    path.0.push(summary.final_pose.xy());
+    path.0.end(&summary.final_pose);
     let scores = score_maps(&scenario.world, robot.vehicle, &robot.start, &mappers);
     let out = mappers
         .into_iter()
@@ -280,7 +278,7 @@ pub fn mapping_experiment(
         .collect();
     Ok(MappingExperiment {
         summary,
-        path: path.0,
+        path: path.0.points(),
         maps: out,
     })
 }

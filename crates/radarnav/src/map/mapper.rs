@@ -375,6 +375,14 @@ mod tests {
         mount = { z = 0.4 }
     "#;
 
+    /// A mapper of the room fed by `sensor`, and one scan of it from the robot's start.
+    fn room_mapper(sensor: &str, config: MapConfig) -> (Mapper, Scan, Pose) {
+        let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
+        let m = Mapper::from_spec(sensor, &s.robots[0], config).unwrap();
+        let (scan, pose) = scan_of(&s, sensor);
+        (m, scan, pose)
+    }
+
     fn scan_of(s: &Scenario, sensor: &str) -> (Scan, Pose) {
         let robot = &s.robots[0];
         let m = robot.sensor(sensor).unwrap();
@@ -391,9 +399,7 @@ mod tests {
 
     #[test]
     fn one_scan_in_a_known_room_gives_the_exact_cells() {
-        let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
-        let mut m = Mapper::from_spec("laser", &s.robots[0], MapConfig::default()).unwrap();
-        let (scan, pose) = scan_of(&s, "laser");
+        let (mut m, scan, pose) = room_mapper("laser", MapConfig::default());
         m.insert_scan(&scan, &pose);
         let g = m.grid();
         let (hit, miss) = (logit(0.7), logit(0.4));
@@ -426,9 +432,7 @@ mod tests {
 
     #[test]
     fn radar_misses_do_not_make_cells_passable() {
-        let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
-        let mut m = Mapper::from_spec("radar", &s.robots[0], MapConfig::default()).unwrap();
-        let (scan, pose) = scan_of(&s, "radar");
+        let (mut m, scan, pose) = room_mapper("radar", MapConfig::default());
         for _ in 0..4 {
             m.insert_scan(&scan, &pose);
         }
@@ -444,13 +448,11 @@ mod tests {
 
     #[test]
     fn no_return_frees_up_to_the_max_free_range_and_marks_no_hit() {
-        let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
         let config = MapConfig {
             max_free_range: 1.0,
             ..MapConfig::default()
         };
-        let mut m = Mapper::from_spec("laser", &s.robots[0], config).unwrap();
-        let (mut scan, pose) = scan_of(&s, "laser");
+        let (mut m, mut scan, pose) = room_mapper("laser", config);
         scan.ranges.fill(f32::INFINITY);
         scan.ranges[0] = f32::NEG_INFINITY;
         // Beyond max_range (50 m): no hit, like no return.
@@ -465,9 +467,7 @@ mod tests {
 
     #[test]
     fn ground_returns_of_a_tilted_plane_are_not_obstacles() {
-        let s = Scenario::from_toml(ROOM, "room.toml", "room").unwrap();
-        let mut m = Mapper::from_spec("tilted", &s.robots[0], MapConfig::default()).unwrap();
-        let (scan, pose) = scan_of(&s, "tilted");
+        let (mut m, scan, pose) = room_mapper("tilted", MapConfig::default());
         m.insert_scan(&scan, &pose);
         let g = m.grid();
         // The -30° plane meets the ground 0.4 / tan 30° = 0.69 m out: free up to there, no

@@ -93,6 +93,38 @@ pub mod files {
 
 type Out = BufWriter<File>;
 
+/// A driven path thinned to a pose per centimetre or more, for figures and the MCAP path.
+#[derive(Clone, Debug, Default)]
+pub struct Trail(Vec<Pose>);
+
+impl Trail {
+    /// Adds `pose` if it is at least a centimetre from the last one kept.
+    pub fn push(&mut self, pose: &Pose) {
+        if self
+            .0
+            .last()
+            .is_none_or(|l| l.xy().distance_squared(pose.xy()) >= 1e-4)
+        {
+            self.0.push(*pose);
+        }
+    }
+
+    /// Adds `pose` whatever its distance (the end of a run).
+    pub fn end(&mut self, pose: &Pose) {
+        self.0.push(*pose);
+    }
+
+    /// The poses kept.
+    pub fn poses(&self) -> &[Pose] {
+        &self.0
+    }
+
+    /// Their positions in the plane.
+    pub fn points(&self) -> Vec<DVec2> {
+        self.0.iter().map(Pose::xy).collect()
+    }
+}
+
 /// Records a run: pass it to [`crate::sim::Simulation::run`], then call [`Recorder::finish`].
 pub struct Recorder {
     dir: PathBuf,
@@ -101,8 +133,8 @@ pub struct Recorder {
     #[cfg(feature = "mcap")]
     mcap: Option<mcap_log::McapLog<Out>>,
     /// True poses, one per centimetre driven or more (for the figure and the MCAP path).
-    truth: Vec<Pose>,
-    odometry: Vec<DVec2>,
+    truth: Trail,
+    odometry: Trail,
     bumps: Vec<DVec2>,
     vehicle: &'static VehicleSpec,
     written: Vec<PathBuf>,
@@ -171,8 +203,8 @@ impl Recorder {
             scan_logs,
             #[cfg(feature = "mcap")]
             mcap,
-            truth: Vec::new(),
-            odometry: Vec::new(),
+            truth: Trail::default(),
+            odometry: Trail::default(),
             bumps: Vec::new(),
             vehicle: robot.vehicle,
             written,
@@ -228,22 +260,24 @@ impl Recorder {
             self.written.push(path);
         }
         // The last pose is not in the step log (steps log their start).
-        self.truth.push(summary.final_pose);
+        self.truth.end(&summary.final_pose);
         #[cfg(feature = "mcap")]
         if let Some(m) = self.mcap.take() {
             let path = self.dir.join(files::MCAP);
-            m.finish(summary.duration, &self.truth)?
+            m.finish(summary.duration, self.truth.poses())?
                 .flush()
                 .map_err(io_at(&path))?;
             self.written.push(path);
         }
-        self.odometry.push(DVec2::new(
-            summary.final_odometry.x,
-            summary.final_odometry.y,
-        ));
+        self.odometry.end(&summary.final_odometry);
         let mut fig = Figure::of_world(&scenario.world, None, pixels)?;
-        fig.draw_path(&self.odometry, [150, 150, 150], 2.0, "path: odometry");
-        let truth: Vec<DVec2> = self.truth.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+        fig.draw_path(
+            &self.odometry.points(),
+            [150, 150, 150],
+            2.0,
+            "path: odometry",
+        );
+        let truth = self.truth.points();
         fig.draw_path(&truth, [20, 120, 40], 3.0, "path: true");
         fig.draw_crosses(&self.bumps, [200, 0, 160], "bump");
         fig.draw_robot(&robot.start, robot.vehicle);
@@ -417,14 +451,8 @@ impl Observer for Recorder {
         if let Some(m) = &mut self.mcap {
             m.step(s)?;
         }
-        let moved = |a: DVec2, b: DVec2| a.distance_squared(b) >= 1e-4;
-        let here = |p: &Pose| DVec2::new(p.x, p.y);
-        if self.truth.last().is_none_or(|l| moved(here(l), here(t))) {
-            self.truth.push(*t);
-        }
-        if self.odometry.last().is_none_or(|l| moved(*l, here(o))) {
-            self.odometry.push(here(o));
-        }
+        self.truth.push(t);
+        self.odometry.push(o);
         if s.bumped && self.bumps.len() < crate::sim::MAX_BUMP_EVENTS {
             self.bumps.push(DVec2::new(t.x, t.y));
         }
