@@ -1,5 +1,6 @@
 //! `radarnav`: the command line over the radarnav library.
 
+mod compare_cmd;
 mod run_cmd;
 
 use std::fs;
@@ -124,6 +125,33 @@ enum Command {
         /// A ray with no return frees map cells up to this range, metres.
         #[arg(long, default_value_t = 10.0)]
         map_max_free_range: f64,
+    },
+    /// Compare exploration strategies with each sensor over several seeds (in parallel):
+    /// writes compare.csv (coverage against distance), compare_runs.csv and compare.png.
+    Compare {
+        /// A built-in name or a path to a .toml file.
+        scenario: String,
+        /// Strategies, comma-separated: bounce, wall_follow, spiral, frontier.
+        #[arg(long, value_delimiter = ',', default_value = "bounce,wall_follow,spiral,frontier")]
+        strategies: Vec<String>,
+        /// Sensors of the robot, comma-separated; each run keeps only one of them.
+        #[arg(long, value_delimiter = ',', default_value = "radar,laser")]
+        sensors: Vec<String>,
+        /// Runs per strategy and sensor, seeds SEED, SEED+1, ...
+        #[arg(long, default_value_t = 5)]
+        seeds: u64,
+        /// First seed (default: the scenario's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Longest simulated time of a run, seconds (default: the scenario's).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Bumper safety distance, metres (default: 2.5 vehicle lengths).
+        #[arg(long)]
+        safety: Option<f64>,
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
     },
     /// Time scans of every sensor of a scenario's first robot; prints rays per second.
     /// With --sim, time a whole simulated run instead.
@@ -257,6 +285,28 @@ fn run(cli: Cli) -> Result<()> {
                 map_pose: &map_pose,
                 map_resolution,
                 map_max_free_range,
+            })
+        }
+        Command::Compare {
+            scenario,
+            strategies,
+            sensors,
+            seeds,
+            seed,
+            duration,
+            safety,
+            out,
+        } => {
+            let s = load(&scenario)?;
+            compare_cmd::compare(&compare_cmd::CompareArgs {
+                scenario: &s,
+                strategies: &strategies,
+                sensors: &sensors,
+                seeds,
+                seed,
+                duration,
+                safety,
+                out: &out,
             })
         }
         Command::Bench {

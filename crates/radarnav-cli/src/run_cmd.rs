@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use radarnav::Scenario;
-use radarnav::map::{MapConfig, Mapper, PoseSource};
+use radarnav::map::{MapConfig, Mapper, PoseSource, track_coverage};
 use radarnav::mission::{MissionKind, TeleopSource, parse_teleop_csv};
 use radarnav::nav::{Idle, TeleopController};
 use radarnav::record::{RecordOptions, Recorder};
@@ -17,6 +17,9 @@ use radarnav::scenario::Robot;
 use radarnav::sim::{
     Controller, NoObserver, Observer, RunSettings, RunSummary, ScanEvent, Simulation, Step,
 };
+
+/// How often an exploration run samples its maps' coverage, s.
+pub const COVERAGE_PERIOD: f64 = 1.0;
 
 /// What `run` and `bench --sim` share: which robot, which controller.
 pub struct Plan<'a> {
@@ -33,6 +36,7 @@ pub fn plan<'a>(
     teleop: Option<&Path>,
     base: Option<&Path>,
     repeat: bool,
+    seed: u64,
 ) -> Result<Plan<'a>> {
     let mission_robot = s.mission.as_ref().and_then(|m| m.robot.as_deref());
     let name = robot.or(mission_robot);
@@ -83,9 +87,9 @@ pub fn plan<'a>(
                 repeat: true,
                 ..w.clone()
             });
-            m.controller()?
+            m.controller(seed)?
         }
-        _ => m.controller()?,
+        _ => m.controller(seed)?,
     };
     Ok(Plan {
         robot: r,
@@ -212,9 +216,18 @@ fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> Result<Ru
 /// `radarnav run`.
 pub fn run(a: &RunArgs<'_>) -> Result<()> {
     let s = a.scenario;
-    let plan = plan(s, a.robot, a.teleop, a.base, false)?;
     let settings = settings(s, a.seed, a.duration)?;
-    let maps = mappers(a, plan.robot)?;
+    let plan = plan(s, a.robot, a.teleop, a.base, false, settings.seed)?;
+    let mut maps = mappers(a, plan.robot)?;
+    if plan.mission == "explore" {
+        track_coverage(
+            &s.world,
+            plan.robot.vehicle,
+            &plan.robot.start,
+            &mut maps,
+            COVERAGE_PERIOD,
+        );
+    }
     let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
     let options = RecordOptions {
         mcap: a.mcap,
@@ -246,6 +259,11 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
         summary.odometry_yaw_error_deg,
         summary.bumps
     )?;
+    if let Some(nav) = &summary.navigation
+        && let Some(reason) = nav.get("reason").and_then(|r| r.as_str())
+    {
+        writeln!(out, "  navigation: {reason}")?;
+    }
     for c in &summary.sensors {
         writeln!(
             out,
@@ -278,7 +296,7 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
 /// `radarnav bench --sim SECONDS`: the scenario's mission (waypoints looping) for that long,
 /// with no recording; prints simulated seconds per wall second.
 pub fn bench_sim(s: &Scenario, seconds: f64) -> Result<()> {
-    let plan = plan(s, None, None, None, true)?;
+    let plan = plan(s, None, None, None, true, s.sim.seed)?;
     let settings = settings(s, None, Some(seconds))?;
     let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
     let (summary, wall) = drive(&mut sim, settings.dt, &mut NoObserver).map_err(|e| match e {})?;

@@ -25,7 +25,7 @@ fn insert(c: &mut Criterion) {
     let s = Scenario::builtin("foliage-wall").expect("built-in");
     let robot = &s.robots[0];
     let mission = s.mission.clone().expect("mission");
-    let ctl = mission.controller().expect("controller");
+    let ctl = mission.controller(0).expect("controller");
     let mut sim = Simulation::new(&s.world, robot, ctl, RunSettings::of(&s)).expect("sim");
     let mut scans = Scans::default();
     sim.run(&mut (&mut scans, NoObserver)).expect("infallible");

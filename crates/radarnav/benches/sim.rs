@@ -24,7 +24,7 @@ fn simulate(c: &mut Criterion) {
                 duration: seconds,
                 ..RunSettings::of(&s)
             };
-            let ctl = mission.controller().expect("controller");
+            let ctl = mission.controller(0).expect("controller");
             let mut sim = Simulation::new(&s.world, &s.robots[0], ctl, settings).expect("sim");
             black_box(sim.run(&mut NoObserver).expect("infallible"))
         })

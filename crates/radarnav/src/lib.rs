@@ -5,12 +5,14 @@
 //! Modules: [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files
 //! and the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`]
 //! (the P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`]
-//! (occupancy grids that tell seen-through from passable),
+//! (occupancy grids that tell seen-through from passable), [`compare`] (exploration
+//! experiments),
 //! [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs: CSV, scan logs,
 //! MCAP), [`render`] (figures), [`demo`] (the thesis experiment).
 
 #![warn(missing_docs)]
 
+pub mod compare;
 pub mod demo;
 pub mod map;
 pub mod mission;

@@ -2,6 +2,8 @@
 //!
 //! * `teleop`: a timed list of drive commands, inline or from a CSV file.
 //! * `waypoints`: visit points in turn with a go-to-point controller steering on odometry.
+//! * `bug1`, `bug2`: reach a goal with the Bug algorithms on virtual bumpers.
+//! * `explore`: explore with a strategy (`bounce`, `wall_follow`, `spiral`, `frontier`).
 //!
 //! A teleop CSV has a header naming its columns, then one command per line:
 //! `duration,v,omega_deg_s` (m/s, degrees/s) or `duration,left,right` (track speeds, m/s).
@@ -10,7 +12,10 @@
 use glam::DVec2;
 use thiserror::Error;
 
-use crate::nav::{TeleopController, WaypointController};
+use crate::nav::{
+    BugController, BugMission, ExploreController, ExploreMission, TeleopController,
+    WaypointController,
+};
 use crate::sim::Controller;
 use crate::vehicle::DriveCommand;
 
@@ -35,6 +40,10 @@ pub enum MissionKind {
     Teleop(TeleopSource),
     /// Go to each point in turn.
     Waypoints(WaypointMission),
+    /// Bug1 or Bug2 to a goal.
+    Bug(BugMission),
+    /// Explore.
+    Explore(ExploreMission),
 }
 
 /// Where teleop commands come from.
@@ -88,8 +97,9 @@ pub enum MissionError {
 }
 
 impl Mission {
-    /// The controller that carries the mission out.
-    pub fn controller(&self) -> Result<Box<dyn Controller>, MissionError> {
+    /// The controller that carries the mission out; `seed` feeds the random choices of the
+    /// strategies that make some.
+    pub fn controller(&self, seed: u64) -> Result<Box<dyn Controller>, MissionError> {
         Ok(match &self.kind {
             MissionKind::Teleop(TeleopSource::Steps(steps)) => {
                 Box::new(TeleopController::new(steps.clone(), self.controller_hz))
@@ -100,14 +110,22 @@ impl Mission {
             MissionKind::Waypoints(w) => {
                 Box::new(WaypointController::new(w.clone(), self.controller_hz))
             }
+            MissionKind::Bug(b) => Box::new(BugController::new(b.clone(), self.controller_hz)),
+            MissionKind::Explore(e) => Box::new(ExploreController::new(
+                e.clone(),
+                self.controller_hz,
+                seed,
+            )),
         })
     }
 
     /// A one-word name of the kind, as in files.
     pub fn kind_name(&self) -> &'static str {
-        match self.kind {
+        match &self.kind {
             MissionKind::Teleop(_) => "teleop",
             MissionKind::Waypoints(_) => "waypoints",
+            MissionKind::Bug(b) => b.algorithm.as_str(),
+            MissionKind::Explore(_) => "explore",
         }
     }
 }

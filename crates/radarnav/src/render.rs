@@ -3,7 +3,8 @@
 
 use glam::{DVec2, DVec3};
 use thiserror::Error;
-use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
+pub use tiny_skia::Pixmap;
+use tiny_skia::{Color, FillRule, Paint, PathBuilder, Rect, Stroke, Transform};
 
 use crate::pose::Pose;
 use crate::sensor::{HitKind, Scan};
@@ -501,6 +502,19 @@ pub fn save_png(pixmap: &Pixmap, path: &std::path::Path) -> Result<(), RenderErr
         path: path.display().to_string(),
         source: Box::new(e),
     })
+}
+
+/// An opaque image from packed 8-bit RGB rows (as plotting back ends draw), for
+/// [`save_png`].
+pub fn pixmap_from_rgb(rgb: &[u8], width: u32, height: u32) -> Result<Pixmap, RenderError> {
+    let mut pixmap = Pixmap::new(width, height).ok_or(RenderError::Size(width, height))?;
+    if rgb.len() != pixmap.data().len() / 4 * 3 {
+        return Err(RenderError::Size(width, height));
+    }
+    for (px, c) in pixmap.data_mut().chunks_exact_mut(4).zip(rgb.chunks_exact(3)) {
+        px.copy_from_slice(&[c[0], c[1], c[2], 255]);
+    }
+    Ok(pixmap)
 }
 
 #[cfg(test)]

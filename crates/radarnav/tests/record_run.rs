@@ -21,7 +21,7 @@ fn tmp(name: &str) -> PathBuf {
 fn record(dir: &Path, duration: f64, maps: &[&str]) -> RunSummary {
     let s = Scenario::builtin("foliage-wall").unwrap();
     let robot = &s.robots[0];
-    let controller = s.mission.as_ref().unwrap().controller().unwrap();
+    let controller = s.mission.as_ref().unwrap().controller(0).unwrap();
     let settings = RunSettings {
         duration,
         ..RunSettings::of(&s)

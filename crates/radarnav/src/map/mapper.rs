@@ -4,11 +4,15 @@
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+use std::sync::Arc;
+
 use super::MapError;
+use super::coverage::{CoverageSample, CoverageTrack};
+use super::truth::Truth;
 use super::grid::{Beam, Grid, Layers, Occupancy};
 use super::walk::CellIndex;
 use crate::pose::Pose;
-use crate::scenario::Robot;
+use crate::scenario::{MountedSensor, Robot};
 use crate::sensor::{Scan, SensorKind};
 use crate::sim::{Observer, ScanEvent, Step};
 use crate::vehicle::VehicleSpec;
@@ -129,6 +133,7 @@ pub struct Mapper {
     beams: Vec<Beam>,
     scans: u64,
     last_body: Option<Pose>,
+    coverage: Option<CoverageTrack>,
 }
 
 impl Mapper {
@@ -139,38 +144,50 @@ impl Mapper {
         sensors: &[&str],
         config: MapConfig,
     ) -> Result<Self, MapError> {
+        Self::for_sensors(name, &robot.name, &robot.sensors, robot.vehicle, sensors, config)
+    }
+
+    /// A mapper named `name` fed by the sensors called `sensors` among `mounted`, the sensors
+    /// of robot `robot` (a name for messages) driving `vehicle`.
+    pub fn for_sensors(
+        name: &str,
+        robot: &str,
+        mounted: &[MountedSensor],
+        vehicle: &'static VehicleSpec,
+        sensors: &[&str],
+        config: MapConfig,
+    ) -> Result<Self, MapError> {
         config.validate()?;
         if sensors.is_empty() {
             return Err(MapError::Config(format!("map `{name}` has no sensor")));
         }
-        let mut mounts = vec![None; robot.sensors.len()];
+        let mut mounts = vec![None; mounted.len()];
         for want in sensors {
-            let i = robot
-                .sensors
+            let i = mounted
                 .iter()
                 .position(|s| s.name == *want)
                 .ok_or_else(|| MapError::UnknownSensor {
                     sensor: (*want).to_owned(),
-                    robot: robot.name.clone(),
-                    known: robot
-                        .sensors
+                    robot: robot.to_owned(),
+                    known: mounted
                         .iter()
                         .map(|s| s.name.as_str())
                         .collect::<Vec<_>>()
                         .join(", "),
                 })?;
-            mounts[i] = Some(robot.sensors[i].mount);
+            mounts[i] = Some(mounted[i].mount);
         }
         Ok(Self {
             name: name.to_owned(),
             sensor_names: sensors.iter().map(|s| (*s).to_owned()).collect(),
             mounts,
-            vehicle: robot.vehicle,
+            vehicle,
             config,
             grid: Grid::new(config.resolution, config.occupancy),
             beams: Vec::new(),
             scans: 0,
             last_body: None,
+            coverage: None,
         })
     }
 
@@ -183,6 +200,23 @@ impl Mapper {
             )));
         }
         Self::new(&names.join("+"), robot, &names, config)
+    }
+
+    /// Samples the map's coverage against `truth` every `period` seconds of the run.
+    pub fn track_coverage(&mut self, truth: Arc<Truth>, period: f64) {
+        self.coverage = Some(CoverageTrack::new(truth, period));
+    }
+
+    /// The coverage samples so far (empty unless tracked).
+    pub fn coverage(&self) -> &[CoverageSample] {
+        self.coverage.as_ref().map_or(&[], |c| c.samples())
+    }
+
+    /// Takes a last coverage sample at the end of a run, at `time`.
+    pub fn finish_coverage(&mut self, time: f64) {
+        if let Some(c) = self.coverage.as_mut() {
+            c.sample(time, &self.grid);
+        }
     }
 
     /// The map's name (used in file names and topics).
@@ -311,6 +345,9 @@ impl Observer for Mapper {
     }
 
     fn on_step(&mut self, step: &Step) -> Result<(), Self::Error> {
+        if let Some(c) = self.coverage.as_mut() {
+            c.step(step.time, &step.truth, &self.grid);
+        }
         if !self.config.body {
             return Ok(());
         }

@@ -9,12 +9,14 @@
 //!   precision and recall). Only scoring reads the world; the mapper never does.
 //! * [`export`]: PNG in the thesis' palette, ROS `map_server` PGM + YAML, NumPy `.npy`.
 
+pub mod coverage;
 pub mod export;
 pub mod grid;
 pub mod mapper;
 pub mod truth;
 pub mod walk;
 
+pub use coverage::{CoverageSample, CoverageTrack, track_coverage};
 pub use grid::{CellClass, Grid, Occupancy};
 pub use mapper::{MapConfig, Mapper, PoseSource};
 pub use truth::{MapScores, Truth, score_maps};

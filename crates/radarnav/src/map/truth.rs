@@ -224,6 +224,7 @@ impl Truth {
         let (mut obs_tp, mut obs_pred, mut obs_true) = (0usize, 0usize, 0usize);
         let (mut free_tp, mut free_pred, mut free_true) = (0usize, 0usize, 0usize);
         let mut free_found = 0usize;
+        let mut free_seen = 0usize;
         let mut known = 0usize;
         for (k, &t) in self.cells.iter().enumerate() {
             let c = (
@@ -239,6 +240,7 @@ impl Truth {
             }
             obs_true += usize::from(!truly_free);
             free_true += usize::from(truly_free && t != TruthCell::Outside);
+            free_seen += usize::from(truly_free && t != TruthCell::Outside && class.sensor_clear());
             if class.blocks() {
                 obs_pred += 1;
                 obs_tp += usize::from(!truly_free);
@@ -260,6 +262,7 @@ impl Truth {
             obstacle_recall: ratio(obs_tp, obs_true),
             free_precision: ratio(free_tp, free_pred),
             free_recall: ratio(free_found, free_true),
+            free_coverage: ratio(free_seen, free_true),
         }
     }
 }
@@ -286,6 +289,9 @@ pub struct MapScores {
     pub free_precision: Option<f64>,
     /// Of the free cells in sight (directly or through foliage), the share mapped clear.
     pub free_recall: Option<f64>,
+    /// Of the free cells in sight, the share the sensor saw (white or grey): how much of the
+    /// free area an exploration has covered.
+    pub free_coverage: Option<f64>,
 }
 
 /// Scores each map against the truth of `world` for a robot of `vehicle` starting at

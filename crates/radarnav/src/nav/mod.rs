@@ -1,13 +1,68 @@
-//! Navigation controllers (DESIGN §6). So far: teleop, waypoint following and standing still.
+//! Navigation (DESIGN §6): virtual bumpers, wall following, Bug1 and Bug2, exploration, and
+//! the simple controllers (teleop, waypoints, standing still).
 
+pub mod bug;
+pub mod bumper;
+pub mod explore;
 mod teleop;
+pub mod wall_follow;
 mod waypoints;
 
+pub use bug::{BugAlgorithm, BugController, BugMission, BugReport};
+pub use explore::{ExploreController, ExploreMission, Strategy};
+pub use bumper::{BumperConfig, BumperRule, BumperSensor, BumperState, Bumpers};
 pub use teleop::TeleopController;
+pub use wall_follow::{FollowRule, Side, WallFollower};
 pub use waypoints::WaypointController;
 
+use crate::map::PoseSource;
+use crate::pose::Pose;
 use crate::sim::{ControlInput, Controller, Decision};
 use crate::vehicle::DriveCommand;
+
+/// The robot pose a controller navigates on: the odometry, or the truth when asked.
+pub fn nav_pose(source: PoseSource, input: &ControlInput<'_>) -> Pose {
+    match source {
+        PoseSource::Truth => *input.truth,
+        PoseSource::Odometry => *input.odometry,
+    }
+}
+
+/// The reflex of a real bumper: after a refused move, back away from what was hit for a
+/// moment (forward if the robot hit something while reversing) before the behaviour resumes.
+#[derive(Clone, Debug, Default)]
+pub struct Recoil {
+    remaining: u32,
+    speed: f64,
+    last_v: f64,
+}
+
+/// How long a recoil lasts, s, and its speed, m/s.
+const RECOIL: (f64, f64) = (0.6, 0.2);
+
+impl Recoil {
+    /// Wraps the behaviour `decide`: runs it unless the robot is recoiling from a bump.
+    pub fn drive(
+        &mut self,
+        input: &ControlInput<'_>,
+        rate_hz: f64,
+        decide: impl FnOnce() -> Decision,
+    ) -> Decision {
+        if input.bumped && self.remaining == 0 {
+            self.remaining = (RECOIL.0 * rate_hz).ceil() as u32;
+            self.speed = if self.last_v > 0.0 { -RECOIL.1 } else { RECOIL.1 };
+        }
+        if self.remaining > 0 {
+            self.remaining -= 1;
+            return Decision::Drive(DriveCommand::twist(self.speed, 0.0));
+        }
+        let d = decide();
+        if let Decision::Drive(DriveCommand::Twist(t)) = d {
+            self.last_v = t.v;
+        }
+        d
+    }
+}
 
 /// Stands still for ever (a run with no mission: the sensors still scan).
 #[derive(Clone, Copy, Debug)]

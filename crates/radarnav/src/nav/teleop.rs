@@ -1,7 +1,7 @@
 //! Replays a timed list of drive commands.
 
 use crate::mission::TeleopStep;
-use crate::sim::{ControlInput, Controller, Decision};
+use crate::sim::{ControlInput, Controller, Decision, Ending};
 
 /// Plays each step's command for its duration, then finishes. The command in force at a call
 /// is the one whose time slot contains the call's time, so slots are honoured to within one
@@ -47,6 +47,6 @@ impl Controller for TeleopController {
         let i = self.ends.partition_point(|&end| end <= input.time + 1e-9);
         self.steps
             .get(i)
-            .map_or(Decision::Finished, |s| Decision::Drive(s.command))
+            .map_or(Decision::Finished(Ending::Completed), |s| Decision::Drive(s.command))
     }
 }

@@ -4,7 +4,7 @@ use glam::DVec2;
 
 use crate::mission::WaypointMission;
 use crate::pose::wrap_angle;
-use crate::sim::{ControlInput, Controller, Decision};
+use crate::sim::{ControlInput, Controller, Decision, Ending};
 use crate::vehicle::DriveCommand;
 
 /// Heading error beyond which the robot turns on the spot before driving, rad (30°).
@@ -49,7 +49,7 @@ impl Controller for WaypointController {
         let here = DVec2::new(pose.x, pose.y);
         loop {
             let Some(&target) = self.mission.points.get(self.next) else {
-                return Decision::Finished;
+                return Decision::Finished(Ending::Completed);
             };
             let to = target - here;
             let dist = to.length();

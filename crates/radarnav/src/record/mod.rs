@@ -89,6 +89,8 @@ pub mod files {
     pub const MCAP: &str = "run.mcap";
     /// Directory of the scan logs, one `<sensor>.rnscan` each.
     pub const SCANS: &str = "scans";
+    /// Coverage of each map against distance (exploration runs).
+    pub const COVERAGE: &str = "coverage.csv";
 }
 
 type Out = BufWriter<File>;
@@ -291,6 +293,28 @@ impl Recorder {
             &png,
         )?;
         self.written.push(png);
+        for m in &mut self.maps {
+            m.finish_coverage(summary.duration);
+        }
+        if self.maps.iter().any(|m| !m.coverage().is_empty()) {
+            let path = self.dir.join(files::COVERAGE);
+            let mut csv = String::from("map,time,distance,free_coverage,hidden_coverage\n");
+            let opt = |x: Option<f64>| x.map_or_else(String::new, |v| format!("{v:.5}"));
+            for m in &self.maps {
+                for c in m.coverage() {
+                    csv.push_str(&format!(
+                        "{},{:.3},{:.4},{},{}\n",
+                        m.name(),
+                        c.time,
+                        c.distance,
+                        opt(c.free),
+                        opt(c.hidden)
+                    ));
+                }
+            }
+            std::fs::write(&path, csv).map_err(io_at(&path))?;
+            self.written.push(path);
+        }
         let scores = score_maps(&scenario.world, robot.vehicle, &robot.start, &self.maps);
         let mut maps = Vec::new();
         for (m, scores) in self.maps.iter().zip(scores) {

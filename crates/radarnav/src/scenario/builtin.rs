@@ -14,6 +14,30 @@ pub const BUILTIN_SCENARIOS: &[(&str, &str)] = &[
         "open-field",
         include_str!("../../../../scenarios/open-field.toml"),
     ),
+    (
+        "foliage-gap",
+        include_str!("../../../../scenarios/foliage-gap.toml"),
+    ),
+    (
+        "bug1-path",
+        include_str!("../../../../scenarios/bug1-path.toml"),
+    ),
+    (
+        "bug1-enclosed",
+        include_str!("../../../../scenarios/bug1-enclosed.toml"),
+    ),
+    (
+        "bug2-path",
+        include_str!("../../../../scenarios/bug2-path.toml"),
+    ),
+    (
+        "bug2-enclosed",
+        include_str!("../../../../scenarios/bug2-enclosed.toml"),
+    ),
+    (
+        "bug-spiral",
+        include_str!("../../../../scenarios/bug-spiral.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name`.

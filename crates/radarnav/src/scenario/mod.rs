@@ -31,6 +31,10 @@ use std::ops::Range;
 use thiserror::Error;
 use toml::Spanned;
 
+use crate::map::PoseSource;
+use crate::nav::{
+    BugAlgorithm, BugMission, BumperConfig, BumperRule, ExploreMission, Side, Strategy,
+};
 use crate::mission::{
     DEFAULT_CONTROLLER_HZ, Mission, MissionKind, TeleopSource, TeleopStep, WaypointMission,
 };
@@ -553,29 +557,61 @@ fn build_mission(
     if robots.is_empty() {
         return Err(ctx.err(span, None, "a mission needs a `[[robot]]` to run it"));
     }
-    // Keys that belong to the other kind are mistakes worth reporting, not ignoring.
-    let misplaced = |keys: &[(&str, bool)], kind: &str| {
-        keys.iter().find(|(_, given)| *given).map(|(k, _)| {
-            ctx.err(
-                span.clone(),
-                Some(k),
-                format!("not a key of a `{kind}` mission"),
-            )
-        })
+    let kind_name = match (&spec.kind, &spec.explore) {
+        (Some(k), _) => k.get_ref().as_str(),
+        (None, Some(_)) => "explore",
+        (None, None) => {
+            return Err(ctx.err(
+                span,
+                None,
+                "a mission needs `type` (teleop, waypoints, bug1, bug2) or `explore`",
+            ));
+        }
     };
-    let kind = match spec.kind.get_ref().as_str() {
+    let kind_span = spec.kind.as_ref().map_or(span.clone(), |k| k.span());
+    // Keys that belong to another kind are mistakes worth reporting, not ignoring.
+    let given = [
+        ("commands", spec.commands.is_some()),
+        ("file", spec.file.is_some()),
+        ("points", spec.points.is_some()),
+        ("loop", spec.repeat.is_some()),
+        ("speed", spec.speed.is_some()),
+        ("tolerance", spec.tolerance.is_some()),
+        ("goal", spec.goal.is_some()),
+        ("mline_tolerance", spec.mline_tolerance.is_some()),
+        ("loop_tolerance", spec.loop_tolerance.is_some()),
+        ("follow", spec.follow.is_some()),
+        ("pose", spec.pose.is_some()),
+        ("bumpers", spec.bumpers.is_some()),
+        ("explore", spec.explore.is_some()),
+    ];
+    let allowed: &[&str] = match kind_name {
+        "teleop" => &["commands", "file"],
+        "waypoints" => &["points", "loop", "speed", "tolerance"],
+        "bug1" | "bug2" => &[
+            "speed",
+            "tolerance",
+            "goal",
+            "mline_tolerance",
+            "loop_tolerance",
+            "follow",
+            "pose",
+            "bumpers",
+        ],
+        "explore" => &["speed", "follow", "pose", "bumpers", "explore"],
+        _ => &[],
+    };
+    if !allowed.is_empty()
+        && let Some((k, _)) = given.iter().find(|(k, g)| *g && !allowed.contains(k))
+    {
+        return Err(ctx.err(
+            span.clone(),
+            Some(k),
+            format!("not a key of a `{kind_name}` mission"),
+        ));
+    }
+    let kind = match kind_name {
         "teleop" => {
-            if let Some(e) = misplaced(
-                &[
-                    ("points", spec.points.is_some()),
-                    ("speed", spec.speed.is_some()),
-                    ("tolerance", spec.tolerance.is_some()),
-                    ("loop", spec.repeat.is_some()),
-                ],
-                "teleop",
-            ) {
-                return Err(e);
-            }
             let source = match (&spec.commands, &spec.file) {
                 (Some(c), None) => {
                     if c.is_empty() {
@@ -599,15 +635,6 @@ fn build_mission(
             MissionKind::Teleop(source)
         }
         "waypoints" => {
-            if let Some(e) = misplaced(
-                &[
-                    ("commands", spec.commands.is_some()),
-                    ("file", spec.file.is_some()),
-                ],
-                "waypoints",
-            ) {
-                return Err(e);
-            }
             let points = xy(spec.points.as_deref().unwrap_or_default());
             if points.is_empty() {
                 return Err(ctx.err(
@@ -623,11 +650,59 @@ fn build_mission(
                 repeat: spec.repeat.unwrap_or(false),
             })
         }
+        "bug1" | "bug2" => {
+            let Some(goal) = &spec.goal else {
+                return Err(ctx.err(span, Some("goal"), "a bug mission needs a `goal = [x, y]`"));
+            };
+            MissionKind::Bug(BugMission {
+                algorithm: if kind_name == "bug1" {
+                    BugAlgorithm::Bug1
+                } else {
+                    BugAlgorithm::Bug2
+                },
+                goal: DVec2::new(goal[0].0, goal[1].0),
+                tolerance: spec.tolerance.map_or(0.3, |v| v.0),
+                mline_tolerance: spec.mline_tolerance.map_or(0.1, |v| v.0),
+                loop_tolerance: spec.loop_tolerance.map_or(0.75, |v| v.0),
+                follow: follow_side(ctx, spec)?,
+                speed: spec.speed.map_or(0.4, |v| v.0),
+                pose: nav_pose(ctx, spec)?,
+                bumpers: bumper_config(ctx, spec, &robots[robot_index(spec, robots)], span.clone())?,
+            })
+        }
+        "explore" => {
+            let Some(e) = &spec.explore else {
+                return Err(ctx.err(
+                    span,
+                    Some("explore"),
+                    "an explore mission needs `explore = \"<strategy>\"`",
+                ));
+            };
+            let strategy = Strategy::parse(e.get_ref()).ok_or_else(|| {
+                ctx.err(
+                    e.span(),
+                    Some("explore"),
+                    format!(
+                        "unknown strategy `{}`; known: bounce, wall_follow, spiral, frontier",
+                        e.get_ref()
+                    ),
+                )
+            })?;
+            MissionKind::Explore(ExploreMission {
+                strategy,
+                speed: spec.speed.map_or(0.4, |v| v.0),
+                follow: follow_side(ctx, spec)?,
+                pose: nav_pose(ctx, spec)?,
+                bumpers: bumper_config(ctx, spec, &robots[robot_index(spec, robots)], span.clone())?,
+            })
+        }
         other => {
             return Err(ctx.err(
-                spec.kind.span(),
+                kind_span,
                 Some("type"),
-                format!("unknown mission type `{other}`; known: teleop, waypoints"),
+                format!(
+                    "unknown mission type `{other}`; known: teleop, waypoints, bug1, bug2, explore"
+                ),
             ));
         }
     };
@@ -636,6 +711,98 @@ fn build_mission(
         controller_hz: spec.controller_hz.map_or(DEFAULT_CONTROLLER_HZ, |v| v.0),
         kind,
     })
+}
+
+/// Index of the robot the mission names (the first when it names none; names are checked).
+fn robot_index(spec: &MissionSpec, robots: &[Robot]) -> usize {
+    spec.robot
+        .as_ref()
+        .and_then(|r| robots.iter().position(|x| &x.name == r.get_ref()))
+        .unwrap_or(0)
+}
+
+fn follow_side(ctx: &Ctx, spec: &MissionSpec) -> Result<Side, ScenarioError> {
+    spec.follow.as_ref().map_or(Ok(Side::Left), |f| {
+        Side::parse(f.get_ref()).ok_or_else(|| {
+            ctx.err(
+                f.span(),
+                Some("follow"),
+                format!("expected `left` or `right`, found `{}`", f.get_ref()),
+            )
+        })
+    })
+}
+
+fn nav_pose(ctx: &Ctx, spec: &MissionSpec) -> Result<PoseSource, ScenarioError> {
+    spec.pose.as_ref().map_or(Ok(PoseSource::Odometry), |f| {
+        PoseSource::parse(f.get_ref()).ok_or_else(|| {
+            ctx.err(
+                f.span(),
+                Some("pose"),
+                format!("expected `odometry` or `truth`, found `{}`", f.get_ref()),
+            )
+        })
+    })
+}
+
+fn bumper_config(
+    ctx: &Ctx,
+    spec: &MissionSpec,
+    robot: &Robot,
+    mission_span: Range<usize>,
+) -> Result<BumperConfig, ScenarioError> {
+    let mut c = BumperConfig::default();
+    let Some(b) = &spec.bumpers else {
+        if robot.sensors.is_empty() {
+            return Err(ctx.err(
+                mission_span,
+                Some("bumpers"),
+                format!("robot `{}` has no sensor to feed the bumpers", robot.name),
+            ));
+        }
+        return Ok(c);
+    };
+    let (bs, span) = (b.get_ref(), b.span());
+    if let Some(k) = &bs.sectors {
+        c.sectors = usize::try_from(*k.get_ref()).unwrap_or(0);
+        if c.sectors != 4 && c.sectors != 8 {
+            return Err(ctx.err(
+                k.span(),
+                Some("sectors"),
+                format!("expected 4 or 8, found {}", k.get_ref()),
+            ));
+        }
+    }
+    c.safety = bs.safety.map(|v| v.0);
+    if let Some(v) = bs.band {
+        c.band = v.0;
+    }
+    if let Some(r) = &bs.rule {
+        c.rule = BumperRule::parse(r.get_ref()).map_err(|m| ctx.err(r.span(), Some("rule"), m))?;
+    }
+    if let Some(n) = &bs.sensor {
+        if !robot.sensors.iter().any(|s| &s.name == n.get_ref()) {
+            let known: Vec<&str> = robot.sensors.iter().map(|s| s.name.as_str()).collect();
+            return Err(ctx.err(
+                n.span(),
+                Some("sensor"),
+                format!(
+                    "robot `{}` has no sensor `{}`; sensors: {}",
+                    robot.name,
+                    n.get_ref(),
+                    known.join(", ")
+                ),
+            ));
+        }
+        c.sensor = Some(n.get_ref().clone());
+    } else if robot.sensors.is_empty() {
+        return Err(ctx.err(
+            span,
+            Some("bumpers"),
+            format!("robot `{}` has no sensor to feed the bumpers", robot.name),
+        ));
+    }
+    Ok(c)
 }
 
 fn teleop_step(ctx: &Ctx, s: &Spanned<spec::TeleopStepSpec>) -> Result<TeleopStep, ScenarioError> {

@@ -91,14 +91,29 @@ pub struct ScenarioSpec {
     pub mission: Option<Spanned<MissionSpec>>,
 }
 
-/// `[mission]`: `type = "teleop"` (timed commands, inline or from a CSV file) or
-/// `type = "waypoints"` (go to each point in turn, steering on odometry).
+/// `[mission]`: `type = "teleop"` (timed commands, inline or from a CSV file),
+/// `type = "waypoints"` (go to each point in turn, steering on odometry), `type = "bug1"` or
+/// `"bug2"` (reach `goal`), or `explore = "<strategy>"`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MissionSpec {
-    /// `"teleop"` or `"waypoints"`.
+    /// `"teleop"`, `"waypoints"`, `"bug1"`, `"bug2"` or `"explore"` (optional with `explore`).
     #[serde(rename = "type")]
-    pub kind: Spanned<String>,
+    pub kind: Option<Spanned<String>>,
+    /// Exploration strategy: `bounce`, `wall_follow`, `spiral` or `frontier`.
+    pub explore: Option<Spanned<String>>,
+    /// bug: the goal, `[x, y]`.
+    pub goal: Option<Xy>,
+    /// bug2: distance to the m-line that counts as on it, m (default 0.1).
+    pub mline_tolerance: Option<Positive>,
+    /// bug: distance to a hit or leave point that counts as back at it, m (default 0.75).
+    pub loop_tolerance: Option<Positive>,
+    /// bug, explore: side the obstacle is kept on when following it, `left` or `right`.
+    pub follow: Option<Spanned<String>>,
+    /// bug, explore: the pose navigation believes, `odometry` (default) or `truth`.
+    pub pose: Option<Spanned<String>>,
+    /// bug, explore: the virtual bumpers.
+    pub bumpers: Option<Spanned<BumperSpec>>,
     /// The robot that runs it (default: the first).
     pub robot: Option<Spanned<String>>,
     /// How often the controller is called, Hz (default 10).
@@ -109,13 +124,30 @@ pub struct MissionSpec {
     pub file: Option<Spanned<String>>,
     /// waypoints: the points to visit, `[x, y]` each.
     pub points: Option<Vec<Xy>>,
-    /// waypoints: cruise speed, m/s (default 0.5).
+    /// waypoints, bug, explore: cruise speed, m/s (default 0.5 for waypoints, 0.4 otherwise).
     pub speed: Option<Positive>,
-    /// waypoints: distance at which a point counts as reached, m (default 0.15).
+    /// waypoints, bug: distance at which a point counts as reached, m (default 0.15 for
+    /// waypoints, 0.3 for a bug goal).
     pub tolerance: Option<Positive>,
     /// waypoints: start over after the last point (default false).
     #[serde(rename = "loop")]
     pub repeat: Option<bool>,
+}
+
+/// `[mission.bumpers]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BumperSpec {
+    /// 4 or 8 (default 8).
+    pub sectors: Option<Spanned<i64>>,
+    /// Safety distance from the robot's centre, m (default 2.5 vehicle lengths).
+    pub safety: Option<Positive>,
+    /// Pressed band beyond the safety distance, m (default 0.5).
+    pub band: Option<Positive>,
+    /// `all` (default), `any` or `fraction:p`.
+    pub rule: Option<Spanned<String>>,
+    /// The sensor feeding the bumpers (default: the robot's first).
+    pub sensor: Option<Spanned<String>>,
 }
 
 /// One timed teleop command: `duration` plus either `v`/`omega_deg_s` or `left`/`right`.

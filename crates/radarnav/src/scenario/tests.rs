@@ -219,7 +219,7 @@ fn missions_parse() {
     ))
     .unwrap();
     assert!(
-        s.mission.unwrap().controller().is_err(),
+        s.mission.unwrap().controller(0).is_err(),
         "an unread file cannot drive"
     );
     let odo = parse(&format!(

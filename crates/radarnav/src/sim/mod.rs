@@ -17,6 +17,8 @@ mod summary;
 
 pub use summary::{BumpEvent, RunOutcome, RunSummary, SensorCount};
 
+use serde::Serialize;
+
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thiserror::Error;
@@ -32,12 +34,19 @@ use crate::world::World;
 pub struct ControlInput<'a> {
     /// Simulation time, s.
     pub time: f64,
-    /// The odometry estimate (never the true pose).
+    /// The odometry estimate.
     pub odometry: &'a Pose,
+    /// The true pose: only for controllers told to navigate on ground truth; the others
+    /// must use `odometry`, as a real robot would.
+    pub truth: &'a Pose,
     /// Whether the last move was refused by a collision.
     pub bumped: bool,
     /// The latest scan of each sensor, in the robot's sensor order (`None` before the first).
+    /// Its `pose` is the true sensor pose at the scan's time.
     pub scans: &'a [Option<Scan>],
+    /// The odometry estimate of the robot pose at the time of each latest scan, same order:
+    /// where a robot without ground truth believes each scan was taken.
+    pub scan_odometry: &'a [Option<Pose>],
     /// The robot's sensors (names, configs, mounts), same order.
     pub sensors: &'a [MountedSensor],
     /// The vehicle being driven.
@@ -50,7 +59,19 @@ pub enum Decision {
     /// Drive with this command until the next call.
     Drive(DriveCommand),
     /// The mission is over; the run ends here.
-    Finished,
+    Finished(Ending),
+}
+
+/// How a controller ended its mission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Ending {
+    /// Done what it was told (teleop commands played, waypoints visited).
+    Completed,
+    /// A navigation goal was reached.
+    Reached,
+    /// The controller proved the goal cannot be reached (Bug1/Bug2 failure conditions).
+    NoPath,
 }
 
 /// Something that drives the robot: called at [`Controller::rate_hz`] with the latest data.
@@ -59,6 +80,10 @@ pub trait Controller {
     fn rate_hz(&self) -> f64;
     /// The command for the coming period.
     fn update(&mut self, input: &ControlInput<'_>) -> Decision;
+    /// What the controller did, for `summary.json` (hit points, leave points, ...).
+    fn report(&self) -> Option<serde_json::Value> {
+        None
+    }
 }
 
 /// One simulation step as logged.
@@ -206,9 +231,10 @@ pub struct Simulation<'a> {
     next_scan: Vec<u64>,
     next_control: u64,
     latest: Vec<Option<Scan>>,
+    latest_odometry: Vec<Option<Pose>>,
     command: Twist,
     bumped: bool,
-    finished: bool,
+    ending: Option<Ending>,
     distance: f64,
     bumps: Vec<BumpEvent>,
     bump_count: usize,
@@ -274,9 +300,10 @@ impl<'a> Simulation<'a> {
             next_scan: vec![0; n],
             next_control: 0,
             latest: vec![None; n],
+            latest_odometry: vec![None; n],
             command: Twist::default(),
             bumped: false,
-            finished: false,
+            ending: None,
             distance: 0.0,
             bumps: Vec::new(),
             bump_count: 0,
@@ -295,7 +322,7 @@ impl<'a> Simulation<'a> {
 
     /// Whether the run is over (time is up or the mission finished).
     pub fn done(&self) -> bool {
-        self.finished || self.tick >= self.ticks
+        self.ending.is_some() || self.tick >= self.ticks
     }
 
     /// True pose now.
@@ -331,15 +358,17 @@ impl<'a> Simulation<'a> {
             let input = ControlInput {
                 time: t,
                 odometry: &self.odometry.pose,
+                truth: &self.truth,
                 bumped: self.bumped,
                 scans: &self.latest,
+                scan_odometry: &self.latest_odometry,
                 sensors: &self.robot.sensors,
                 vehicle: self.robot.vehicle,
             };
             match self.controller.update(&input) {
                 Decision::Drive(cmd) => self.command = self.robot.vehicle.limit(cmd),
-                Decision::Finished => {
-                    self.finished = true;
+                Decision::Finished(ending) => {
+                    self.ending = Some(ending);
                     self.command = Twist::default();
                     return Ok(false);
                 }
@@ -429,6 +458,7 @@ impl<'a> Simulation<'a> {
                 odometry,
             })?;
             self.latest[i] = Some(scan);
+            self.latest_odometry[i] = Some(odometry);
         }
     }
 
@@ -445,6 +475,16 @@ impl<'a> Simulation<'a> {
             let p = integrate(start, cmd, dt * f64::from(k) / f64::from(n));
             self.world.blocking_object(&self.robot.vehicle.body(&p))
         })
+    }
+
+    /// How the controller ended the mission (`None` while it runs or when time ran out).
+    pub fn ending(&self) -> Option<Ending> {
+        self.ending
+    }
+
+    /// The controller's report (see [`Controller::report`]).
+    pub fn controller_report(&self) -> Option<serde_json::Value> {
+        self.controller.report()
     }
 
     /// What the run did so far.

@@ -2,17 +2,31 @@
 
 use serde::Serialize;
 
-use super::Simulation;
+use super::{Ending, Simulation};
 use crate::pose::{Pose, wrap_angle};
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RunOutcome {
-    /// The controller said the mission was over.
+    /// The controller said the mission was done.
     Completed,
+    /// The navigation goal was reached.
+    Reached,
+    /// The controller found that no path leads to the goal.
+    NoPath,
     /// Time ran out first.
     Timeout,
+}
+
+impl From<Ending> for RunOutcome {
+    fn from(e: Ending) -> Self {
+        match e {
+            Ending::Completed => Self::Completed,
+            Ending::Reached => Self::Reached,
+            Ending::NoPath => Self::NoPath,
+        }
+    }
 }
 
 /// A refused move.
@@ -72,6 +86,9 @@ pub struct RunSummary {
     pub bump_events: Vec<BumpEvent>,
     /// Scans per sensor.
     pub sensors: Vec<SensorCount>,
+    /// What the controller reports of its mission (Bug: goal, hit and leave points, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub navigation: Option<serde_json::Value>,
 }
 
 impl RunSummary {
@@ -85,11 +102,7 @@ impl RunSummary {
             dt: sim.settings.dt,
             duration: sim.time(),
             steps: sim.tick,
-            outcome: if sim.finished {
-                RunOutcome::Completed
-            } else {
-                RunOutcome::Timeout
-            },
+            outcome: sim.ending.map_or(RunOutcome::Timeout, RunOutcome::from),
             distance: sim.distance,
             odometry_distance: sim.odometry.distance,
             final_pose: truth,
@@ -110,6 +123,7 @@ impl RunSummary {
                     scans: n,
                 })
                 .collect(),
+            navigation: sim.controller.report(),
         }
     }
 }

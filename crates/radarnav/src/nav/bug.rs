@@ -1,0 +1,361 @@
+//! Bug1 and Bug2 (Choset et al. 2005, ch. 2) on virtual bumpers (DESIGN §6).
+//!
+//! Both drive straight at the goal until the bumper toward it trips (a *hit point*), then
+//! follow the obstacle's boundary with a [`WallFollower`] until they may *leave* it:
+//! * **Bug1** goes once round the whole obstacle, remembering the boundary point closest to
+//!   the goal and how far along the boundary it lay; back at the hit point it goes to that
+//!   point the shorter way round (turning about and following with the obstacle on the other
+//!   side when going back is shorter, so it covers at most 1.5 perimeters) and leaves there.
+//!   If the way
+//!   toward the goal is blocked at that leave point, or the robot hits the obstacle again
+//!   within the loop tolerance of it, the line from the leave point re-enters the same
+//!   obstacle: `no_path`.
+//! * **Bug2** leaves where it crosses the *m-line* (start to goal) closer to the goal than
+//!   its hit point and the way toward the goal is open. A crossing is a change of side of the
+//!   line between two calls, or a position within `mline_tolerance` of it, between start and
+//!   goal. Back at the hit point without such a crossing: `no_path`.
+//!
+//! The goal is reached within `tolerance` of it. The pose used is the odometry, or the true
+//! pose when the mission asks for it; "back at the hit point" means within
+//! `loop_tolerance` after having been at least twice that far away from it.
+
+use glam::DVec2;
+use serde::Serialize;
+
+use super::bumper::{BumperConfig, BumperSensor, BumperState};
+use super::{Recoil, nav_pose};
+use super::wall_follow::{Side, WallFollower};
+use crate::map::PoseSource;
+use crate::pose::wrap_angle;
+use crate::sim::{ControlInput, Controller, Decision, Ending};
+use crate::vehicle::DriveCommand;
+
+/// Heading error beyond which the robot turns on the spot, rad (30°).
+const TURN_IN_PLACE: f64 = 0.52;
+/// Turn-rate gain toward the goal, (rad/s) per rad.
+const K_HEADING: f64 = 1.5;
+/// Turn rate on the spot, rad/s.
+const TURN_RATE: f64 = 0.8;
+/// How much closer than the hit point a Bug2 leave point must be, m: crossings at the hit
+/// point itself do not count.
+const CLOSER_BY: f64 = 0.2;
+
+/// Which Bug.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BugAlgorithm {
+    /// Circumnavigate, then leave at the closest point.
+    Bug1,
+    /// Leave at a closer m-line crossing.
+    Bug2,
+}
+
+impl BugAlgorithm {
+    /// `bug1` or `bug2`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Bug1 => "bug1",
+            Self::Bug2 => "bug2",
+        }
+    }
+}
+
+/// The parameters of a Bug mission (`[mission] type = "bug1"` or `"bug2"`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BugMission {
+    /// Which algorithm.
+    pub algorithm: BugAlgorithm,
+    /// Goal, m.
+    pub goal: DVec2,
+    /// The goal counts as reached within this distance, m.
+    pub tolerance: f64,
+    /// Distance to the m-line that counts as on it, m (Bug2).
+    pub mline_tolerance: f64,
+    /// Distance to the hit (or leave) point that counts as back at it, m.
+    pub loop_tolerance: f64,
+    /// The side the obstacle is kept on while following it.
+    pub follow: Side,
+    /// Cruise speed, m/s.
+    pub speed: f64,
+    /// The pose the algorithm believes in.
+    pub pose: PoseSource,
+    /// Bumpers.
+    pub bumpers: BumperConfig,
+}
+
+/// What a Bug run did, for `summary.json`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct BugReport {
+    /// `bug1` or `bug2`.
+    pub algorithm: Option<BugAlgorithm>,
+    /// Goal, m.
+    pub goal: [f64; 2],
+    /// `truth` or `odometry`.
+    pub pose: &'static str,
+    /// Where the robot met obstacles, in its believed frame.
+    pub hit_points: Vec<[f64; 2]>,
+    /// Where it left them.
+    pub leave_points: Vec<[f64; 2]>,
+    /// Bug2: m-line crossings seen while following boundaries.
+    pub mline_crossings: usize,
+    /// Distance driven while following boundaries (believed), m.
+    pub boundary_distance: f64,
+    /// Believed distance to the goal at the end, m.
+    pub goal_distance: f64,
+    /// Why the run ended, in words.
+    pub reason: String,
+}
+
+#[derive(Clone, Debug)]
+enum Mode {
+    ToGoal,
+    Follow(Boundary),
+}
+
+#[derive(Clone, Debug)]
+struct Boundary {
+    hit: DVec2,
+    hit_goal_dist: f64,
+    away: bool,
+    /// Bug1: closest point to the goal so far, its distance and the boundary distance
+    /// from the hit point at which it was met.
+    closest: (DVec2, f64, f64),
+    /// Distance followed along this boundary, m.
+    travelled: f64,
+    /// Bug1: turn still to make on the spot to go back the other way, rad.
+    about_turn: f64,
+    /// Bug1: the loop is closed; heading for `closest`.
+    circled: bool,
+    /// Bug1: been away from `closest` since circling (it may be the hit point itself).
+    away_from_closest: bool,
+    /// Bug2: within the m-line tolerance at the last call.
+    on_mline: bool,
+}
+
+/// A Bug1 or Bug2 controller.
+#[derive(Clone, Debug)]
+pub struct BugController {
+    mission: BugMission,
+    rate_hz: f64,
+    bumpers: BumperSensor,
+    follower: WallFollower,
+    mode: Mode,
+    start: Option<DVec2>,
+    last: Option<DVec2>,
+    last_leave: Option<DVec2>,
+    recoil: Recoil,
+    report: BugReport,
+}
+
+impl BugController {
+    /// A controller for `mission`, called at `rate_hz`.
+    pub fn new(mission: BugMission, rate_hz: f64) -> Self {
+        let report = BugReport {
+            algorithm: Some(mission.algorithm),
+            goal: mission.goal.to_array(),
+            pose: mission.pose.as_str(),
+            ..Default::default()
+        };
+        Self {
+            bumpers: BumperSensor::new(mission.bumpers.clone()),
+            follower: WallFollower::new(mission.follow, mission.speed, TURN_RATE),
+            mission,
+            rate_hz,
+            mode: Mode::ToGoal,
+            start: None,
+            last: None,
+            last_leave: None,
+            recoil: Recoil::default(),
+            report,
+        }
+    }
+
+    /// What the run did so far.
+    pub fn bug_report(&self) -> &BugReport {
+        &self.report
+    }
+
+    fn end(&mut self, ending: Ending, reason: &str) -> Decision {
+        self.report.reason = reason.to_owned();
+        Decision::Finished(ending)
+    }
+
+    /// The signed distance of `p` to the m-line and whether its foot lies between start and
+    /// goal.
+    fn mline(&self, p: DVec2) -> (f64, bool) {
+        let s = self.start.unwrap_or(p);
+        let d = self.mission.goal - s;
+        let len = d.length().max(1e-9);
+        let u = d / len;
+        let r = p - s;
+        let along = r.dot(u);
+        (u.perp_dot(r), (-self.mission.loop_tolerance..=len).contains(&along))
+    }
+}
+
+impl Controller for BugController {
+    fn rate_hz(&self) -> f64 {
+        self.rate_hz
+    }
+
+    fn update(&mut self, input: &ControlInput<'_>) -> Decision {
+        let mut recoil = std::mem::take(&mut self.recoil);
+        let d = recoil.drive(input, self.rate_hz, || self.decide(input));
+        self.recoil = recoil;
+        d
+    }
+
+    fn report(&self) -> Option<serde_json::Value> {
+        serde_json::to_value(&self.report).ok()
+    }
+}
+
+impl BugController {
+    fn decide(&mut self, input: &ControlInput<'_>) -> Decision {
+        let pose = nav_pose(self.mission.pose, input);
+        let p = pose.xy();
+        self.start.get_or_insert(p);
+        let step = self.last.map_or(0.0, |l| (p - l).length());
+        let prev = self.last.replace(p);
+        let goal = self.mission.goal;
+        let goal_dist = (goal - p).length();
+        self.report.goal_distance = goal_dist;
+        if goal_dist <= self.mission.tolerance {
+            return self.end(Ending::Reached, "goal reached");
+        }
+        let dt = 1.0 / self.rate_hz;
+        let radius = self.bumpers.follow_radius(input.vehicle);
+        let heading = wrap_angle((goal - p).to_angle() - pose.yaw);
+        let Some(b) = self.bumpers.update(input).cloned() else {
+            // No scan yet: wait for the bumpers.
+            return Decision::Drive(DriveCommand::STOP);
+        };
+        // Hit: the bumper toward the goal trips. Leaving needs more: nothing at all in that
+        // sector up to the band's far edge.
+        let hit = b.toward(heading) != BumperState::Clear;
+        let goal_blocked = b.nearest_toward(heading) <= self.bumpers.reach(input.vehicle);
+        let tol = self.mission.loop_tolerance;
+        let (side, within) = self.mline(p);
+        let prev_side = prev.map_or(side, |q| self.mline(q).0);
+        match &mut self.mode {
+            Mode::ToGoal => {
+                if hit && heading.abs() <= TURN_IN_PLACE {
+                    if self.mission.algorithm == BugAlgorithm::Bug1
+                        && self.last_leave.is_some_and(|l| (p - l).length() <= tol)
+                    {
+                        return self.end(
+                            Ending::NoPath,
+                            "bug1: the line from the leave point toward the goal re-enters the obstacle",
+                        );
+                    }
+                    self.report.hit_points.push(p.to_array());
+                    self.follower =
+                        WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE);
+                    self.follower.engage();
+                    self.mode = Mode::Follow(Boundary {
+                        hit: p,
+                        hit_goal_dist: goal_dist,
+                        away: false,
+                        closest: (p, goal_dist, 0.0),
+                        travelled: 0.0,
+                        about_turn: 0.0,
+                        circled: false,
+                        away_from_closest: false,
+                        on_mline: true,
+                    });
+                    return Decision::Drive(self.follower.command(&b, dt, radius));
+                }
+                let omega = (K_HEADING * heading).clamp(-TURN_RATE, TURN_RATE);
+                let v = if heading.abs() > TURN_IN_PLACE {
+                    0.0
+                } else {
+                    goal_dist.min(self.mission.speed) * heading.cos()
+                };
+                Decision::Drive(DriveCommand::twist(v, omega))
+            }
+            Mode::Follow(bd) => {
+                self.report.boundary_distance += step;
+                let from_hit = (p - bd.hit).length();
+                if from_hit > 2.0 * tol {
+                    bd.away = true;
+                }
+                let back_at_hit = bd.away && from_hit <= tol;
+                match self.mission.algorithm {
+                    BugAlgorithm::Bug1 => {
+                        bd.travelled += step;
+                        // Points met while turning away at the hit point are not on the
+                        // followed path: candidates start once the robot has left it.
+                        if !bd.circled && bd.away && goal_dist < bd.closest.1 {
+                            bd.closest = (p, goal_dist, bd.travelled);
+                        }
+                        if back_at_hit && !bd.circled {
+                            bd.circled = true;
+                            // Going on reaches the closest point after `closest.2`, going
+                            // back after the rest of the loop: turn about when that is shorter.
+                            if bd.closest.2 > bd.travelled / 2.0 {
+                                bd.about_turn = std::f64::consts::PI;
+                            }
+                        }
+                        if bd.about_turn > 0.0 {
+                            let s = self.follower.side().sign();
+                            bd.about_turn -= TURN_RATE * dt;
+                            if bd.about_turn <= 0.0 {
+                                let other = match self.follower.side() {
+                                    Side::Left => Side::Right,
+                                    Side::Right => Side::Left,
+                                };
+                                self.follower =
+                                    WallFollower::new(other, self.mission.speed, TURN_RATE);
+                                self.follower.engage();
+                            }
+                            return Decision::Drive(DriveCommand::twist(0.0, -s * TURN_RATE));
+                        }
+                        if bd.circled {
+                            let from_closest = (p - bd.closest.0).length();
+                            if from_closest > 2.0 * tol {
+                                bd.away_from_closest = true;
+                            }
+                            // The closest point may be the hit point itself.
+                            let at_closest = from_closest <= tol
+                                && (bd.away_from_closest || bd.closest.0 == bd.hit);
+                            if at_closest {
+                                if goal_blocked {
+                                    return self.end(
+                                        Ending::NoPath,
+                                        "bug1: the way toward the goal from the closest point is blocked by the same obstacle",
+                                    );
+                                }
+                                self.report.leave_points.push(p.to_array());
+                                self.last_leave = Some(p);
+                                self.mode = Mode::ToGoal;
+                                return Decision::Drive(DriveCommand::STOP);
+                            }
+                        }
+                    }
+                    BugAlgorithm::Bug2 => {
+                        let near = side.abs() <= self.mission.mline_tolerance;
+                        let crossed = within
+                            && ((near && !bd.on_mline)
+                                || (!near && side.signum() != prev_side.signum()));
+                        bd.on_mline = near;
+                        if crossed {
+                            self.report.mline_crossings += 1;
+                            if goal_dist < bd.hit_goal_dist - CLOSER_BY && !goal_blocked {
+                                self.report.leave_points.push(p.to_array());
+                                self.mode = Mode::ToGoal;
+                                return Decision::Drive(DriveCommand::STOP);
+                            }
+                        }
+                        if back_at_hit {
+                            return self.end(
+                                Ending::NoPath,
+                                "bug2: back at the hit point without a closer m-line crossing",
+                            );
+                        }
+                    }
+                }
+                Decision::Drive(self.follower.command(&b, dt, radius))
+            }
+        }
+    }
+}

@@ -1,0 +1,421 @@
+//! Virtual bumpers (DESIGN §6): a scan grouped into K sectors, each *clear*, *pressed* or
+//! *too close*.
+//!
+//! Sector `k` of `K` is centred on `k · 360°/K` counter-clockwise from the robot's front:
+//! with 4 sectors front, left, back, right; with 8 also the diagonals in between. Ranges are
+//! measured from the robot's centre (a sensor mounted off-centre is accounted for), so the
+//! same safety distance means the same thing for every sensor.
+//!
+//! A sector is *too close* when any of its rays returns nearer than the safety distance (a
+//! thin pole must not be outvoted), *pressed* when its rays satisfy the activation rule in
+//! the band `[safety, safety + band]`, and *clear* otherwise. A sector with no rays (the
+//! blind back of a 270° laser) is clear.
+//!
+//! # Safety distance and radar penetration
+//! A thesis-model radar reports foliage where its budget runs out, up to
+//! `budget / attenuation` metres *inside* it (`radar_thesis`: 3 dB, so 1 m into
+//! `foliage_dense` at 3 dB/m); a volume thinner than that gives no return at all. A bumper
+//! that keeps the robot's centre `safety` from such a return keeps its front
+//! `safety − depth − length/2` from the foliage's surface. The default, 2.5 vehicle lengths
+//! (1.27 m for the P3AT), leaves 1.27 − 1 − 0.25 ≈ 0 m at the worst depth: the thesis'
+//! reason for 2–3 lengths. Take `safety ≥ length/2 + budget/attenuation + margin` for
+//! denser budgets, and note that foliage the radar crosses whole is invisible to it.
+
+use std::f64::consts::TAU;
+use std::fmt;
+
+use crate::pose::{Pose, wrap_angle};
+use crate::sensor::Scan;
+use crate::sim::ControlInput;
+use crate::vehicle::VehicleSpec;
+
+/// How many of a sector's rays must lie in the band for it to be pressed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BumperRule {
+    /// Every ray (the thesis' rule).
+    All,
+    /// At least one ray.
+    Any,
+    /// At least this share of the rays, in (0, 1].
+    Fraction(f64),
+}
+
+impl BumperRule {
+    /// Parses `all`, `any` or `fraction:p` with `0 < p ≤ 1`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => Ok(Self::All),
+            "any" => Ok(Self::Any),
+            _ => {
+                let p = s
+                    .strip_prefix("fraction:")
+                    .ok_or_else(|| format!("unknown bumper rule `{s}`; known: all, any, fraction:p"))?;
+                match p.parse::<f64>() {
+                    Ok(p) if p > 0.0 && p <= 1.0 => Ok(Self::Fraction(p)),
+                    _ => Err(format!(
+                        "`fraction:{p}`: expected a share in (0, 1], e.g. fraction:0.8"
+                    )),
+                }
+            }
+        }
+    }
+
+    fn pressed(self, in_band: usize, rays: usize) -> bool {
+        match self {
+            Self::All => in_band == rays,
+            Self::Any => in_band > 0,
+            Self::Fraction(p) => in_band as f64 >= p * rays as f64,
+        }
+    }
+}
+
+impl fmt::Display for BumperRule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::All => f.write_str("all"),
+            Self::Any => f.write_str("any"),
+            Self::Fraction(p) => write!(f, "fraction:{p}"),
+        }
+    }
+}
+
+/// The state of one bumper.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BumperState {
+    /// Nothing in or inside the band.
+    Clear,
+    /// The rule holds in the band: an obstacle at the wanted distance.
+    Pressed,
+    /// Something nearer than the safety distance.
+    TooClose,
+}
+
+/// Bumper parameters (`[mission.bumpers]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BumperConfig {
+    /// Sectors: 4 or 8.
+    pub sectors: usize,
+    /// Safety distance from the robot's centre, m; `None`: [`DEFAULT_SAFETY_LENGTHS`] vehicle
+    /// lengths.
+    pub safety: Option<f64>,
+    /// Width of the pressed band beyond the safety distance, m.
+    pub band: f64,
+    /// Activation rule.
+    pub rule: BumperRule,
+    /// The sensor whose scans feed the bumpers (`None`: the robot's first sensor).
+    pub sensor: Option<String>,
+}
+
+/// Default safety distance in vehicle lengths (DESIGN §6: 2–3).
+pub const DEFAULT_SAFETY_LENGTHS: f64 = 2.5;
+
+impl Default for BumperConfig {
+    fn default() -> Self {
+        Self {
+            sectors: 8,
+            safety: None,
+            band: 0.5,
+            rule: BumperRule::All,
+            sensor: None,
+        }
+    }
+}
+
+impl BumperConfig {
+    /// The safety distance for `vehicle`, m.
+    pub fn safety_for(&self, vehicle: &VehicleSpec) -> f64 {
+        self.safety
+            .unwrap_or(DEFAULT_SAFETY_LENGTHS * vehicle.length)
+    }
+
+    /// Checks the values.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.sectors != 4 && self.sectors != 8 {
+            return Err(format!("`sectors`: expected 4 or 8, found {}", self.sectors));
+        }
+        if let Some(s) = self.safety
+            && !(s > 0.0 && s.is_finite())
+        {
+            return Err(format!("`safety`: expected a number > 0, found {s}"));
+        }
+        if !(self.band > 0.0 && self.band.is_finite()) {
+            return Err(format!("`band`: expected a number > 0, found {}", self.band));
+        }
+        Ok(())
+    }
+
+    /// Index of the configured sensor among `names` (the first when none is named).
+    pub fn sensor_index<'a>(&self, mut names: impl Iterator<Item = &'a str>) -> Option<usize> {
+        match &self.sensor {
+            None => names.next().map(|_| 0),
+            Some(n) => names.position(|x| x == n),
+        }
+    }
+}
+
+/// The bumpers' states from one scan.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bumpers {
+    states: Vec<BumperState>,
+    nearest: Vec<f64>,
+}
+
+impl Bumpers {
+    /// Bumpers from `scan` of a sensor mounted at `mount` on the robot, with `safety` and
+    /// `band` in metres from the robot's centre.
+    pub fn sense(scan: &Scan, mount: &Pose, sectors: usize, safety: f64, band: f64, rule: BumperRule) -> Self {
+        let width = TAU / sectors as f64;
+        let mut rays = vec![0usize; sectors];
+        let mut close = vec![0usize; sectors];
+        let mut in_band = vec![0usize; sectors];
+        let mut nearest = vec![f64::INFINITY; sectors];
+        for (i, &r) in scan.ranges.iter().enumerate() {
+            let dir = mount.yaw + scan.angles(i).0;
+            let (angle, dist) = if r.is_finite() {
+                let (s, c) = dir.sin_cos();
+                let (x, y) = (mount.x + f64::from(r) * c, mount.y + f64::from(r) * s);
+                (y.atan2(x), x.hypot(y))
+            } else if r < 0.0 {
+                // Below the sensor's minimum range: as close as can be.
+                (dir, 0.0)
+            } else {
+                (dir, f64::INFINITY)
+            };
+            let k = sector_index(angle, width, sectors);
+            rays[k] += 1;
+            nearest[k] = nearest[k].min(dist);
+            if dist < safety {
+                close[k] += 1;
+            } else if dist <= safety + band {
+                in_band[k] += 1;
+            }
+        }
+        let states = (0..sectors)
+            .map(|k| {
+                if close[k] > 0 {
+                    BumperState::TooClose
+                } else if rays[k] > 0 && rule.pressed(in_band[k], rays[k]) {
+                    BumperState::Pressed
+                } else {
+                    BumperState::Clear
+                }
+            })
+            .collect();
+        Self { states, nearest }
+    }
+
+    /// Number of sectors.
+    pub fn sectors(&self) -> usize {
+        self.states.len()
+    }
+
+    /// State of sector `k` (taken modulo the count, so `k = -1` style offsets wrap).
+    pub fn state(&self, k: isize) -> BumperState {
+        self.states[k.rem_euclid(self.states.len() as isize) as usize]
+    }
+
+    /// State of the sector holding the robot-frame direction `angle` (rad, CCW from front).
+    pub fn toward(&self, angle: f64) -> BumperState {
+        let n = self.states.len();
+        self.states[sector_index(angle, TAU / n as f64, n)]
+    }
+
+    /// Nearest range in sector `k` from the robot's centre, m (`inf`: no return).
+    pub fn nearest(&self, k: isize) -> f64 {
+        self.nearest[k.rem_euclid(self.nearest.len() as isize) as usize]
+    }
+
+    /// Nearest range in the sector holding the robot-frame direction `angle`, m.
+    pub fn nearest_toward(&self, angle: f64) -> f64 {
+        let n = self.nearest.len();
+        self.nearest[sector_index(angle, TAU / n as f64, n)]
+    }
+
+    /// All states, sector 0 (front) first, counter-clockwise.
+    pub fn states(&self) -> &[BumperState] {
+        &self.states
+    }
+}
+
+/// Bumpers kept up to date from a robot's scans: recomputed when its sensor has a new scan.
+#[derive(Clone, Debug)]
+pub struct BumperSensor {
+    config: BumperConfig,
+    stamp: f64,
+    bumpers: Option<Bumpers>,
+}
+
+impl BumperSensor {
+    /// Bumpers of `config`.
+    pub fn new(config: BumperConfig) -> Self {
+        Self {
+            config,
+            stamp: f64::NEG_INFINITY,
+            bumpers: None,
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &BumperConfig {
+        &self.config
+    }
+
+    /// The safety distance plus the band for `vehicle`: nearer than this, a sector is not free.
+    pub fn reach(&self, vehicle: &VehicleSpec) -> f64 {
+        self.config.safety_for(vehicle) + self.config.band
+    }
+
+    /// The wanted distance from a followed wall: the middle of the pressed band, m.
+    pub fn follow_radius(&self, vehicle: &VehicleSpec) -> f64 {
+        self.config.safety_for(vehicle) + self.config.band / 2.0
+    }
+
+    /// The bumpers from the latest scan of the configured sensor (`None` before its first
+    /// scan, or if the robot has no such sensor).
+    pub fn update(&mut self, input: &ControlInput<'_>) -> Option<&Bumpers> {
+        let i = self
+            .config
+            .sensor_index(input.sensors.iter().map(|s| s.name.as_str()))?;
+        let scan = input.scans.get(i)?.as_ref()?;
+        if scan.stamp != self.stamp || self.bumpers.is_none() {
+            self.stamp = scan.stamp;
+            let c = &self.config;
+            self.bumpers = Some(Bumpers::sense(
+                scan,
+                &input.sensors[i].mount,
+                c.sectors,
+                c.safety_for(input.vehicle),
+                c.band,
+                c.rule,
+            ));
+        }
+        self.bumpers.as_ref()
+    }
+}
+
+fn sector_index(angle: f64, width: f64, sectors: usize) -> usize {
+    ((wrap_angle(angle) / width).round() as isize).rem_euclid(sectors as isize) as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor::{Beam, HitKind, SensorKind};
+
+    /// A full-circle scan of `n` rays whose range is `f(azimuth)`.
+    pub(crate) fn ring_scan(n: usize, f: impl Fn(f64) -> f32) -> Scan {
+        let inc = TAU / n as f64;
+        let ranges: Vec<f32> = (0..n).map(|i| f(-std::f64::consts::PI + i as f64 * inc)).collect();
+        Scan {
+            stamp: 0.0,
+            kind: SensorKind::Radar,
+            pose: Pose::default(),
+            angle_min: -std::f64::consts::PI,
+            angle_increment: inc,
+            azimuths: n,
+            elevations: vec![0.0],
+            range_min: 0.1,
+            range_max: 20.0,
+            side_beam_offset: 0.0,
+            hits: vec![HitKind::None; n],
+            materials: vec![None; n],
+            beams: vec![Beam::Center; n],
+            ranges,
+        }
+    }
+
+    /// Range to a straight wall parallel to the robot's x axis at `y = d` (left side).
+    fn left_wall(d: f64) -> impl Fn(f64) -> f32 {
+        move |a: f64| {
+            if a.sin() > 1e-9 {
+                (d / a.sin()) as f32
+            } else {
+                f32::INFINITY
+            }
+        }
+    }
+
+    #[test]
+    fn rule_parsing() {
+        assert_eq!(BumperRule::parse("all"), Ok(BumperRule::All));
+        assert_eq!(BumperRule::parse("fraction:0.75"), Ok(BumperRule::Fraction(0.75)));
+        assert!(BumperRule::parse("fraction:0").unwrap_err().contains("(0, 1]"));
+        assert!(BumperRule::parse("most").unwrap_err().contains("known: all, any"));
+        assert_eq!(BumperRule::Fraction(0.5).to_string(), "fraction:0.5");
+    }
+
+    #[test]
+    fn wall_on_the_left_presses_only_the_left_sector() {
+        let s = ring_scan(360, left_wall(1.4));
+        let b = Bumpers::sense(&s, &Pose::default(), 8, 1.27, 0.5, BumperRule::All);
+        // Sector 2 (left) spans 67.5°..112.5°: ranges 1.4 .. 1.4 / sin 67.5° = 1.515, in band.
+        assert_eq!(b.state(2), BumperState::Pressed);
+        // The diagonals reach past the band (1.4 / sin 22.5° = 3.7 m): not every ray in it.
+        for k in [0, 1, 3, 4, 5, 6, 7] {
+            assert_eq!(b.state(k), BumperState::Clear, "sector {k}");
+        }
+        assert!((b.nearest(2) - 1.4).abs() < 1e-3);
+        // Any: the diagonals have rays in the band too.
+        let any = Bumpers::sense(&s, &Pose::default(), 8, 1.27, 0.5, BumperRule::Any);
+        assert_eq!(any.state(1), BumperState::Pressed);
+        assert_eq!(any.state(3), BumperState::Pressed);
+        assert_eq!(any.state(0), BumperState::Clear);
+        // Nearer than the safety distance: too close, whatever the rule.
+        let near = Bumpers::sense(&ring_scan(360, left_wall(1.0)), &Pose::default(), 8, 1.27, 0.5, BumperRule::All);
+        assert_eq!(near.state(2), BumperState::TooClose);
+        assert_eq!(near.toward(std::f64::consts::FRAC_PI_2), BumperState::TooClose);
+        // Four sectors of 90°: the left one's edge rays reach 1.4 / sin 45° = 1.98 m > band.
+        let four = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::All);
+        assert_eq!(four.state(1), BumperState::Clear);
+        let frac = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::Fraction(0.6));
+        // In band from 1.4 up to 1.77 m: |angle − 90°| ≤ acos(1.4/1.77) = 37.7°, 84 % of 90°.
+        assert_eq!(frac.state(1), BumperState::Pressed);
+        let strict = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::Fraction(0.9));
+        assert_eq!(strict.state(1), BumperState::Clear);
+    }
+
+    #[test]
+    fn one_close_ray_is_too_close_and_minus_inf_counts_as_close() {
+        let mut s = ring_scan(360, |_| f32::INFINITY);
+        s.ranges[180] = 0.8; // straight ahead
+        let b = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::All);
+        assert_eq!(b.state(0), BumperState::TooClose);
+        assert_eq!(b.state(1), BumperState::Clear);
+        s.ranges[180] = f32::NEG_INFINITY;
+        let b = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::All);
+        assert_eq!(b.state(0), BumperState::TooClose);
+        assert_eq!(b.nearest(0), 0.0);
+    }
+
+    #[test]
+    fn mount_offset_and_yaw_move_rays_to_the_robot_frame() {
+        // A sensor 1 m ahead of the centre, looking backwards: its forward ray (azimuth 0)
+        // at 1.5 m ends 0.5 m behind the robot's centre.
+        let mut s = ring_scan(360, |_| f32::INFINITY);
+        s.ranges[180] = 1.5;
+        let mount = Pose::new(1.0, 0.0, 0.0, std::f64::consts::PI);
+        let b = Bumpers::sense(&s, &mount, 4, 1.0, 0.5, BumperRule::Any);
+        assert_eq!(b.state(2), BumperState::TooClose);
+        assert!((b.nearest(2) - 0.5).abs() < 1e-6);
+        assert_eq!(b.state(0), BumperState::Clear);
+    }
+
+    #[test]
+    fn empty_sector_is_clear_and_config_checks() {
+        // A 180° scan covers only the front half.
+        let mut s = ring_scan(180, |_| 1.4);
+        s.angle_min = -std::f64::consts::FRAC_PI_2;
+        s.angle_increment = std::f64::consts::PI / 180.0;
+        let b = Bumpers::sense(&s, &Pose::default(), 4, 1.0, 0.5, BumperRule::All);
+        assert_eq!(b.state(2), BumperState::Clear);
+        assert_eq!(b.state(0), BumperState::Pressed);
+        let c = BumperConfig { sectors: 6, ..Default::default() };
+        assert!(c.validate().unwrap_err().contains("4 or 8"));
+        let p3at = crate::vehicle::vehicle("p3at").unwrap();
+        assert!((BumperConfig::default().safety_for(p3at) - 1.27).abs() < 1e-9);
+        let named = BumperConfig { sensor: Some("laser".into()), ..Default::default() };
+        assert_eq!(named.sensor_index(["radar", "laser"].into_iter()), Some(1));
+        assert_eq!(BumperConfig::default().sensor_index(["radar"].into_iter()), Some(0));
+        assert_eq!(named.sensor_index(["radar"].into_iter()), None);
+    }
+}

@@ -1,0 +1,436 @@
+//! Exploration strategies (DESIGN §6), all on virtual bumpers:
+//! * `bounce`: straight ahead until the front trips, then turn on the spot by a random
+//!   angle in [90°, 270°] (the vacuum-robot strategy);
+//! * `wall_follow`: find a wall and follow it ([`WallFollower`]);
+//! * `spiral`: an Archimedean spiral out from where it starts, turns `SPIRAL_SPACING` apart;
+//!   when the front trips it follows the wall for a while, then starts a new spiral;
+//! * `frontier` (Yamauchi 1997): builds its own occupancy grid from its sensors at the pose
+//!   it believes, and drives to the nearest reachable frontier (a sensor-clear cell next to
+//!   an unknown one) along a breadth-first path through clear cells kept the safety distance
+//!   from anything that blocks; it ends the mission when no frontier is reachable.
+
+use std::collections::VecDeque;
+use std::f64::consts::{PI, TAU};
+
+use glam::DVec2;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::bumper::{BumperConfig, BumperSensor, BumperState, Bumpers};
+use super::wall_follow::{Side, WallFollower};
+use super::{Recoil, nav_pose};
+use crate::map::{CellClass, MapConfig, Mapper, PoseSource};
+use crate::pose::wrap_angle;
+use crate::sim::{ControlInput, Controller, Decision, Ending};
+use crate::vehicle::DriveCommand;
+
+/// Turn rate on the spot, rad/s.
+const TURN_RATE: f64 = 0.8;
+/// Distance between spiral turns, m.
+pub const SPIRAL_SPACING: f64 = 1.5;
+/// Starting radius of a spiral, m.
+const SPIRAL_R0: f64 = 0.5;
+/// How long the spiral strategy follows a wall before starting a new spiral, s.
+const SPIRAL_WALL_TIME: f64 = 15.0;
+/// Cell size of the frontier strategy's own grid, m.
+pub const FRONTIER_RESOLUTION: f64 = 0.1;
+/// How often the frontier strategy plans anew, s.
+const FRONTIER_REPLAN: f64 = 2.0;
+/// The frontier strategy ends when no frontier has been reachable for this long, s.
+const GIVE_UP_AFTER: f64 = 6.0;
+/// Frontiers nearer than this (in path length) are not targets, m: the rear of the robot is
+/// unknown until the scans have swept it.
+const MIN_FRONTIER_DISTANCE: f64 = 1.0;
+/// The 8 neighbours of a cell.
+const NEIGHBOURS: [(i64, i64); 8] = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)];
+/// Look-ahead along the planned path, m.
+const LOOKAHEAD: f64 = 0.6;
+
+/// An exploration strategy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// Straight, turn by a random angle at obstacles.
+    Bounce,
+    /// Follow walls.
+    WallFollow,
+    /// Centre-out spiral.
+    Spiral,
+    /// Nearest frontier on an occupancy grid.
+    Frontier,
+}
+
+impl Strategy {
+    /// Every strategy.
+    pub const ALL: [Strategy; 4] = [Self::Bounce, Self::WallFollow, Self::Spiral, Self::Frontier];
+
+    /// Parses a name as in [`Strategy::as_str`].
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|x| x.as_str() == s)
+    }
+
+    /// `bounce`, `wall_follow`, `spiral` or `frontier`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Bounce => "bounce",
+            Self::WallFollow => "wall_follow",
+            Self::Spiral => "spiral",
+            Self::Frontier => "frontier",
+        }
+    }
+}
+
+/// The parameters of an exploration mission (`[mission] explore = "…"`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExploreMission {
+    /// Strategy.
+    pub strategy: Strategy,
+    /// Cruise speed, m/s.
+    pub speed: f64,
+    /// Side walls are kept on.
+    pub follow: Side,
+    /// The pose the frontier strategy maps and plans with.
+    pub pose: PoseSource,
+    /// Bumpers.
+    pub bumpers: BumperConfig,
+}
+
+#[derive(Clone, Debug)]
+enum Phase {
+    Straight,
+    Turn { left: f64, sign: f64 },
+    Spiral { turned: f64 },
+    Wall { until: f64 },
+    Path,
+}
+
+/// Drives an [`ExploreMission`].
+#[derive(Clone, Debug)]
+pub struct ExploreController {
+    mission: ExploreMission,
+    rate_hz: f64,
+    rng: ChaCha8Rng,
+    bumpers: BumperSensor,
+    follower: WallFollower,
+    phase: Phase,
+    recoil: Recoil,
+    frontier: Option<Frontier>,
+}
+
+impl ExploreController {
+    /// A controller for `mission` at `rate_hz`; `seed` drives the random turns.
+    pub fn new(mission: ExploreMission, rate_hz: f64, seed: u64) -> Self {
+        let phase = match mission.strategy {
+            Strategy::Bounce => Phase::Straight,
+            Strategy::WallFollow => Phase::Wall { until: f64::INFINITY },
+            Strategy::Spiral => Phase::Spiral { turned: 0.0 },
+            Strategy::Frontier => Phase::Path,
+        };
+        Self {
+            bumpers: BumperSensor::new(mission.bumpers.clone()),
+            follower: WallFollower::new(mission.follow, mission.speed, TURN_RATE),
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            phase,
+            recoil: Recoil::default(),
+            frontier: None,
+            mission,
+            rate_hz,
+        }
+    }
+
+    fn decide(&mut self, input: &ControlInput<'_>) -> Decision {
+        let dt = 1.0 / self.rate_hz;
+        if self.mission.strategy == Strategy::Frontier {
+            self.map_scans(input);
+        }
+        let Some(b) = self.bumpers.update(input).cloned() else {
+            return Decision::Drive(DriveCommand::STOP);
+        };
+        let speed = self.mission.speed;
+        let radius = self.bumpers.follow_radius(input.vehicle);
+        let front_blocked = front_trips(&b);
+        match &mut self.phase {
+            Phase::Straight => {
+                if front_blocked {
+                    let angle = self.rng.random_range(0.5 * PI..1.5 * PI);
+                    let sign = if self.rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                    self.phase = Phase::Turn { left: angle, sign };
+                    return Decision::Drive(DriveCommand::STOP);
+                }
+                // Something too close at a side: veer away from it while going on.
+                let q = b.sectors() as isize / 4;
+                let side = |k| b.state(k) == BumperState::TooClose;
+                let omega = match (side(q), side(-q)) {
+                    (true, false) => -0.5 * TURN_RATE,
+                    (false, true) => 0.5 * TURN_RATE,
+                    _ => 0.0,
+                };
+                Decision::Drive(DriveCommand::twist(speed, omega))
+            }
+            Phase::Turn { left, sign } => {
+                if *left <= 0.0 && !front_blocked {
+                    self.phase = Phase::Straight;
+                    return Decision::Drive(DriveCommand::twist(speed, 0.0));
+                }
+                *left -= TURN_RATE * dt;
+                Decision::Drive(DriveCommand::twist(0.0, *sign * TURN_RATE))
+            }
+            Phase::Spiral { turned } => {
+                if front_blocked {
+                    self.follower = WallFollower::new(self.mission.follow, speed, TURN_RATE);
+                    self.follower.engage();
+                    self.phase = Phase::Wall {
+                        until: input.time + SPIRAL_WALL_TIME,
+                    };
+                    return Decision::Drive(self.follower.command(&b, dt, radius));
+                }
+                let r = SPIRAL_R0 + SPIRAL_SPACING * *turned / TAU;
+                let omega = self.mission.follow.sign() * speed / r;
+                *turned += omega.abs() * dt;
+                Decision::Drive(DriveCommand::twist(speed, omega))
+            }
+            Phase::Wall { until } => {
+                if input.time >= *until && !front_blocked {
+                    self.phase = Phase::Spiral { turned: 0.0 };
+                }
+                Decision::Drive(self.follower.command(&b, dt, radius))
+            }
+            Phase::Path => self.frontier_step(input, &b),
+        }
+    }
+
+    /// Feeds new scans into the frontier strategy's own map, at the believed pose.
+    fn map_scans(&mut self, input: &ControlInput<'_>) {
+        let f = self.frontier.get_or_insert_with(|| {
+            let names: Vec<&str> = input.sensors.iter().map(|s| s.name.as_str()).collect();
+            let config = MapConfig {
+                resolution: FRONTIER_RESOLUTION,
+                ..MapConfig::default()
+            };
+            let mapper = Mapper::for_sensors("frontier", "robot", input.sensors, input.vehicle, &names, config)
+                .ok();
+            Frontier {
+                mapper,
+                stamps: vec![f64::NEG_INFINITY; input.sensors.len()],
+                path: Vec::new(),
+                next_plan: 0.0,
+                rejected: Vec::new(),
+                target: None,
+                failing_since: None,
+                done: false,
+            }
+        });
+        let Some(mapper) = f.mapper.as_mut() else {
+            return;
+        };
+        for (i, scan) in input.scans.iter().enumerate() {
+            let Some(scan) = scan else { continue };
+            if scan.stamp == f.stamps[i] {
+                continue;
+            }
+            f.stamps[i] = scan.stamp;
+            let pose = match self.mission.pose {
+                PoseSource::Truth => scan.pose,
+                PoseSource::Odometry => match input.scan_odometry.get(i).copied().flatten() {
+                    Some(o) => o.compose(&input.sensors[i].mount),
+                    None => continue,
+                },
+            };
+            mapper.insert_scan(scan, &pose);
+        }
+    }
+
+    fn frontier_step(&mut self, input: &ControlInput<'_>, b: &Bumpers) -> Decision {
+        let pose = nav_pose(self.mission.pose, input);
+        let keep_off = self.bumpers.reach(input.vehicle) - self.mission.bumpers.band / 2.0;
+        let speed = self.mission.speed;
+        let Some(f) = self.frontier.as_mut() else {
+            return Decision::Drive(DriveCommand::STOP);
+        };
+        if f.done {
+            return Decision::Finished(Ending::Completed);
+        }
+        // Plan only once every sensor has scanned.
+        if f.stamps.iter().any(|s| !s.is_finite()) {
+            return Decision::Drive(DriveCommand::STOP);
+        }
+        // Blocked ahead: give the target up, plan anew.
+        if front_trips(b) && !f.path.is_empty() {
+            if let Some(t) = f.target {
+                f.rejected.push(t);
+            }
+            f.path.clear();
+            f.next_plan = input.time;
+        }
+        if input.time >= f.next_plan || f.path.is_empty() {
+            f.next_plan = input.time + FRONTIER_REPLAN;
+            if f.plan(pose.xy(), keep_off).is_some() {
+                f.failing_since = None;
+            } else {
+                // A cell needs a few scans to count as clear: give up only when no frontier
+                // has been reachable for a while.
+                let since = *f.failing_since.get_or_insert(input.time);
+                if input.time - since >= GIVE_UP_AFTER {
+                    f.done = true;
+                    return Decision::Finished(Ending::Completed);
+                }
+                f.next_plan = input.time + 0.5;
+                return Decision::Drive(DriveCommand::STOP);
+            }
+        }
+        // Pure pursuit on the path.
+        let here = pose.xy();
+        while f.path.len() > 1 && (f.path[0] - here).length() < LOOKAHEAD {
+            f.path.remove(0);
+        }
+        let Some(&aim) = f.path.first() else {
+            return Decision::Drive(DriveCommand::STOP);
+        };
+        if f.path.len() == 1 && (aim - here).length() < 0.3 {
+            f.path.clear();
+            return Decision::Drive(DriveCommand::STOP);
+        }
+        let err = wrap_angle((aim - here).to_angle() - pose.yaw);
+        let omega = (1.5 * err).clamp(-TURN_RATE, TURN_RATE);
+        let v = if err.abs() > 0.52 { 0.0 } else { speed * err.cos() };
+        // Turning on the spot with the front tripped is safe; driving on is not.
+        if front_trips(b) {
+            return Decision::Drive(DriveCommand::twist(0.0, self.mission.follow.sign() * -TURN_RATE));
+        }
+        Decision::Drive(DriveCommand::twist(v, omega))
+    }
+}
+
+/// Whether the front sector (and, with 8 sectors, the diagonals beside it) reports
+/// something at or inside the band.
+fn front_trips(b: &Bumpers) -> bool {
+    let diag = if b.sectors() == 8 { 1 } else { 0 };
+    (-diag..=diag).any(|k| {
+        let s = b.state(k);
+        s == BumperState::TooClose || (k == 0 && s == BumperState::Pressed)
+    })
+}
+
+impl Controller for ExploreController {
+    fn rate_hz(&self) -> f64 {
+        self.rate_hz
+    }
+
+    fn update(&mut self, input: &ControlInput<'_>) -> Decision {
+        let mut recoil = std::mem::take(&mut self.recoil);
+        let d = recoil.drive(input, self.rate_hz, || self.decide(input));
+        self.recoil = recoil;
+        d
+    }
+}
+
+/// The frontier strategy's map and plan.
+#[derive(Clone, Debug)]
+struct Frontier {
+    mapper: Option<Mapper>,
+    stamps: Vec<f64>,
+    path: Vec<DVec2>,
+    next_plan: f64,
+    rejected: Vec<DVec2>,
+    target: Option<DVec2>,
+    failing_since: Option<f64>,
+    done: bool,
+}
+
+impl Frontier {
+    /// Plans a path from `from` to the nearest reachable frontier through clear cells at
+    /// least `keep_off` from any blocking cell. `None`: no frontier is reachable.
+    fn plan(&mut self, from: DVec2, keep_off: f64) -> Option<()> {
+        let grid = self.mapper.as_ref()?.grid();
+        let (w, h) = (grid.width(), grid.height());
+        let res = grid.resolution();
+        let (oi, oj) = grid.origin_cell();
+        let classes = grid.classes();
+        // Inflate blocking cells by `keep_off` (a disc of cells around each).
+        let r = (keep_off / res).ceil() as i64;
+        let mut inflated = vec![false; w * h];
+        let disc: Vec<(i64, i64)> = (-r..=r)
+            .flat_map(|dj| (-r..=r).map(move |di| (di, dj)))
+            .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * res <= keep_off)
+            .collect();
+        for (k, c) in classes.iter().enumerate() {
+            if c.blocks() {
+                let (i, j) = ((k % w) as i64, (k / w) as i64);
+                for &(di, dj) in &disc {
+                    let (a, b) = (i + di, j + dj);
+                    if a >= 0 && b >= 0 && (a as usize) < w && (b as usize) < h {
+                        inflated[b as usize * w + a as usize] = true;
+                    }
+                }
+            }
+        }
+        let at = |i: i64, j: i64| -> Option<usize> {
+            (i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h).then(|| j as usize * w + i as usize)
+        };
+        let start_cell = grid.cell_of(from);
+        let start = at(start_cell.0 - oi, start_cell.1 - oj)?;
+        let centre = |k: usize| {
+            DVec2::new(
+                (oi + (k % w) as i64) as f64 + 0.5,
+                (oj + (k / w) as i64) as f64 + 0.5,
+            ) * res
+        };
+        // A frontier cell has at least 3 unknown cells among its 8 neighbours: single unknown
+        // cells between the rays of a far scan are not frontiers.
+        let is_frontier = |k: usize| {
+            let (i, j) = ((k % w) as i64, (k / w) as i64);
+            NEIGHBOURS
+                .iter()
+                .filter(|(di, dj)| at(i + di, j + dj).is_none_or(|n| classes[n] == CellClass::Unknown))
+                .count()
+                >= 3
+        };
+        let min_steps = (MIN_FRONTIER_DISTANCE / res).ceil() as u32;
+        let mut steps = vec![0u32; w * h];
+        let mut parent = vec![usize::MAX; w * h];
+        parent[start] = start;
+        // Cells reached through inflated cells only: the robot may leave the inflated zone it
+        // stands in, but not cross one.
+        let mut escaping = vec![false; w * h];
+        escaping[start] = true;
+        let mut queue = VecDeque::from([start]);
+        let mut found = None;
+        while let Some(k) = queue.pop_front() {
+            if steps[k] >= min_steps
+                && is_frontier(k)
+                && !self.rejected.iter().any(|r| (*r - centre(k)).length() < 1.0)
+            {
+                found = Some(k);
+                break;
+            }
+            let (i, j) = ((k % w) as i64, (k / w) as i64);
+            for (di, dj) in NEIGHBOURS {
+                if let Some(n) = at(i + di, j + dj)
+                    && parent[n] == usize::MAX
+                    && classes[n] == CellClass::Clear
+                    && (!inflated[n] || escaping[k])
+                {
+                    escaping[n] = escaping[k] && inflated[n];
+                    steps[n] = steps[k] + 1;
+                    parent[n] = k;
+                    queue.push_back(n);
+                }
+            }
+        }
+        let goal = found?;
+        let mut cells = vec![goal];
+        while let Some(&k) = cells.last() {
+            if k == start {
+                break;
+            }
+            cells.push(parent[k]);
+        }
+        cells.reverse();
+        self.path = cells.into_iter().skip(1).step_by(3).map(centre).collect();
+        let end = centre(goal);
+        if self.path.last() != Some(&end) {
+            self.path.push(end);
+        }
+        self.target = Some(end);
+        Some(())
+    }
+}
