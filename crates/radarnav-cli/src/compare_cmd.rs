@@ -146,7 +146,8 @@ fn opt(x: Option<f64>) -> String {
 }
 
 fn write_samples(dir: &Path, results: &[ExploreResult]) -> Result<std::path::PathBuf> {
-    let mut csv = String::from("strategy,sensor,seed,time,distance,free_coverage,hidden_coverage\n");
+    let mut csv =
+        String::from("strategy,sensor,seed,time,distance,free_coverage,hidden_coverage\n");
     for r in results {
         for c in &r.coverage {
             writeln!(
@@ -229,7 +230,11 @@ fn table(results: &[ExploreResult]) -> String {
         let bumps = runs.iter().map(|r| r.summary.bumps as f64).sum::<f64>() / n;
         let last = |hidden: bool| -> Vec<Option<f64>> {
             runs.iter()
-                .map(|r| r.coverage.last().and_then(|c| if hidden { c.hidden } else { c.free }))
+                .map(|r| {
+                    r.coverage
+                        .last()
+                        .and_then(|c| if hidden { c.hidden } else { c.free })
+                })
                 .collect()
         };
         let at: Vec<Option<f64>> = runs
@@ -260,8 +265,12 @@ const COLOURS: [RGBColor; 4] = [
 
 fn plot(dir: &Path, s: &Scenario, results: &[ExploreResult]) -> Result<std::path::PathBuf> {
     // ab_glyph draws text with registered fonts only; the font ships in the binary.
-    plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT)
-        .map_err(|_| anyhow::anyhow!("the plot font did not load"))?;
+    plotters::style::register_font(
+        "sans-serif",
+        FontStyle::Normal,
+        epaint_default_fonts::UBUNTU_LIGHT,
+    )
+    .map_err(|_| anyhow::anyhow!("the plot font did not load"))?;
     let (w, h) = (1400u32, 620u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     let max_d = results
@@ -311,6 +320,8 @@ fn plot(dir: &Path, s: &Scenario, results: &[ExploreResult]) -> Result<std::path
                 .x_desc("distance travelled, m")
                 .y_desc("coverage, %")
                 .label_style(("sans-serif", 15))
+                .light_line_style(WHITE)
+                .bold_line_style(RGBColor(225, 225, 225))
                 .draw()
                 .map_err(draw_err)?;
             for (key, runs) in &groups {

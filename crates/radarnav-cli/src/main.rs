@@ -132,7 +132,11 @@ enum Command {
         /// A built-in name or a path to a .toml file.
         scenario: String,
         /// Strategies, comma-separated: bounce, wall_follow, spiral, frontier.
-        #[arg(long, value_delimiter = ',', default_value = "bounce,wall_follow,spiral,frontier")]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "bounce,wall_follow,spiral,frontier"
+        )]
         strategies: Vec<String>,
         /// Sensors of the robot, comma-separated; each run keeps only one of them.
         #[arg(long, value_delimiter = ',', default_value = "radar,laser")]
@@ -389,7 +393,8 @@ fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
         );
     }
     say!("figures written to {}", out.display());
-    map_demo(&s, seed, out)
+    map_demo(&s, seed, out)?;
+    bug_demo(seed, out)
 }
 
 /// The second half of the demo: the foliage-wall mission driven once while four maps are
@@ -457,11 +462,92 @@ fn map_demo(s: &Scenario, seed: u64, out: &Path) -> Result<()> {
             path: &e.path,
             robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
             region: Some(radarnav::render::world_region(&s.world)),
+            marks: None,
         };
         export::write_all(m.mapper.grid(), out, stem, &title, 900, &overlay)?;
     }
     say!(
         "maps written to {} (map_*.png in the thesis' palette, .pgm/.yaml for ROS map_server, .npy raw log-odds)",
+        out.display()
+    );
+    Ok(())
+}
+
+/// The third part of the demo: Bug1 and Bug2 with the radar on foliage-gap (the
+/// foliage-wall hedge with a way round it), the goal behind the hedge; each path drawn over
+/// the radar map built on the way.
+fn bug_demo(seed: u64, out: &Path) -> Result<()> {
+    use radarnav::map::{PoseSource, export};
+    use radarnav::mission::MissionKind;
+    use radarnav::nav::BugAlgorithm;
+    let base = Scenario::builtin("foliage-gap").context("built-in scenario")?;
+    say!("");
+    say!(
+        "Bug1 and Bug2 with the radar on foliage-gap: the foliage-wall hedge with a 3 m opening at its north end, the goal behind it:"
+    );
+    say!(
+        "{:<6} {:>9} {:>10} {:>8} {:>6} {:>6} {:>7} {:>10}",
+        "algo",
+        "outcome",
+        "path",
+        "time",
+        "bumps",
+        "hits",
+        "leaves",
+        "to goal"
+    );
+    for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
+        let mut s = base.clone();
+        if let Some(MissionKind::Bug(b)) = s.mission.as_mut().map(|m| &mut m.kind) {
+            b.algorithm = algorithm;
+        }
+        let e =
+            radarnav::demo::mapping_experiment(&s, seed, &[("radar", PoseSource::Truth)], 0.05)?;
+        let robot = s.robot(None).context("foliage-gap has a robot")?;
+        let nav = e.summary.navigation.clone().unwrap_or_default();
+        let count = |k: &str| nav[k].as_array().map_or(0, Vec::len);
+        let outcome = serde_json::to_value(e.summary.outcome)?;
+        let m = &e.maps[0];
+        let to_goal = nav["goal_distance"].as_f64().unwrap_or(f64::NAN);
+        let goal: Vec<glam::DVec2> = match s.mission.as_ref().map(|m| &m.kind) {
+            Some(MissionKind::Bug(b)) => vec![b.goal],
+            _ => Vec::new(),
+        };
+        say!(
+            "{:<6} {:>9} {:>8.1} m {:>6.1} s {:>6} {:>6} {:>7} {:>8.2} m",
+            algorithm.as_str(),
+            outcome.as_str().unwrap_or("?"),
+            e.summary.distance,
+            e.summary.duration,
+            e.summary.bumps,
+            count("hit_points"),
+            count("leave_points"),
+            to_goal
+        );
+        let title = format!(
+            "foliage-gap - {} with the radar: {} after {:.1} m, {} bumps",
+            algorithm.as_str(),
+            outcome.as_str().unwrap_or("?"),
+            e.summary.distance,
+            e.summary.bumps
+        );
+        let overlay = export::Overlay {
+            path: &e.path,
+            robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
+            region: Some(radarnav::render::world_region(&s.world)),
+            marks: Some((&goal, "goal")),
+        };
+        export::write_all(
+            m.mapper.grid(),
+            out,
+            &format!("{}_radar", algorithm.as_str()),
+            &title,
+            900,
+            &overlay,
+        )?;
+    }
+    say!(
+        "paths over the radar maps written to {} (bug1_radar.png, bug2_radar.png)",
         out.display()
     );
     Ok(())

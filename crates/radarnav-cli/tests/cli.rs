@@ -123,6 +123,187 @@ fn demo_writes_the_four_figures_and_the_table() {
         assert!(yaml.contains(&format!("image: {stem}.pgm")), "{yaml}");
         assert!(read(&dir, &format!("{stem}.npy")).starts_with(b"\x93NUMPY"));
     }
+    // The Bug half: both reach the goal behind the hedge with the radar, without a bump.
+    for algo in ["bug1", "bug2"] {
+        let line = table
+            .lines()
+            .find(|l| l.starts_with(algo))
+            .unwrap_or_else(|| panic!("{table}"));
+        let cols: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!((cols[1], cols[6]), ("reached", "0"), "{line}");
+        assert!(read(&dir, &format!("{algo}_radar.png")).starts_with(b"\x89PNG"));
+    }
+}
+
+#[test]
+fn run_a_bug_mission_reports_its_navigation() {
+    let dir = tmp("bug");
+    let out = radarnav(&[
+        "run",
+        "bug1-enclosed",
+        "--out",
+        dir.to_str().unwrap(),
+        "--no-mcap",
+        "--no-maps",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(stdout.contains("navigation: bug1:"), "{stdout}");
+    let v: serde_json::Value = serde_json::from_slice(&read(&dir, "summary.json")).unwrap();
+    assert_eq!(v["outcome"], "no_path");
+    assert_eq!(v["mission"], "bug1");
+    assert_eq!(v["bumps"], 0);
+    let nav = &v["navigation"];
+    assert_eq!(nav["algorithm"], "bug1");
+    assert_eq!(nav["hit_points"].as_array().unwrap().len(), 1);
+    assert!(nav["boundary_distance"].as_f64().unwrap() > 20.0, "{nav}");
+}
+
+#[test]
+fn run_an_exploration_records_coverage_against_distance() {
+    let dir = tmp("explore");
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/foliage-wall.toml"
+    ))
+    .unwrap();
+    let cut = src.find("[mission]").unwrap();
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("explore.toml");
+    std::fs::write(
+        &file,
+        format!("{}[mission]\nexplore = \"wall_follow\"\n", &src[..cut]),
+    )
+    .unwrap();
+    let out = radarnav(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--no-mcap",
+        "--duration",
+        "30",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8(read(&dir, "coverage.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("map,time,distance,free_coverage,hidden_coverage")
+    );
+    let radar: Vec<Vec<f64>> = lines
+        .filter(|l| l.starts_with("radar,"))
+        .map(|l| l.split(',').skip(1).map(|x| x.parse().unwrap()).collect())
+        .collect();
+    // One sample a second, 0 to 30 s; distance and coverage never decrease much.
+    assert_eq!(radar.len(), 31, "{csv}");
+    assert!(radar.windows(2).all(|w| w[1][1] >= w[0][1]), "{csv}");
+    let last = radar.last().unwrap();
+    assert!(
+        last[1] > 5.0 && last[3] > 0.3,
+        "radar sees behind the hedge: {last:?}"
+    );
+    assert!(
+        csv.lines()
+            .filter(|l| l.starts_with("laser,"))
+            .all(|l| l.ends_with(",0.00000")),
+        "{csv}"
+    );
+}
+
+#[test]
+fn compare_writes_the_csvs_the_plot_and_a_table_and_rejects_bad_input() {
+    let dir = tmp("compare");
+    let out = radarnav(&[
+        "compare",
+        "foliage-wall",
+        "--strategies",
+        "bounce,frontier",
+        "--sensors",
+        "radar,laser",
+        "--seeds",
+        "2",
+        "--duration",
+        "20",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8(out.stdout).unwrap();
+    for key in [
+        "bounce / radar",
+        "bounce / laser",
+        "frontier / radar",
+        "frontier / laser",
+    ] {
+        assert!(table.lines().any(|l| l.starts_with(key)), "{table}");
+    }
+    let runs = String::from_utf8(read(&dir, "compare_runs.csv")).unwrap();
+    assert_eq!(runs.lines().count(), 1 + 2 * 2 * 2, "{runs}");
+    let samples = String::from_utf8(read(&dir, "compare.csv")).unwrap();
+    assert!(
+        samples.starts_with("strategy,sensor,seed,time,distance,free_coverage,hidden_coverage\n")
+    );
+    assert!(
+        samples
+            .lines()
+            .filter(|l| l.starts_with("bounce,radar,2,"))
+            .count()
+            >= 21,
+        "{samples}"
+    );
+    assert!(read(&dir, "compare.png").starts_with(b"\x89PNG"));
+    // Same seeds, same numbers.
+    let again = tmp("compare-again");
+    let out2 = radarnav(&[
+        "compare",
+        "foliage-wall",
+        "--strategies",
+        "bounce,frontier",
+        "--seeds",
+        "2",
+        "--duration",
+        "20",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(out2.status.success());
+    assert_eq!(read(&again, "compare.csv"), read(&dir, "compare.csv"));
+    for (args, want) in [
+        (
+            &["compare", "foliage-wall", "--strategies", "zigzag"][..],
+            "unknown strategy `zigzag`",
+        ),
+        (
+            &["compare", "foliage-wall", "--sensors", "sonar"][..],
+            "no sensor `sonar`",
+        ),
+        (
+            &["compare", "foliage-wall", "--seeds", "0"][..],
+            "--seeds must be at least 1",
+        ),
+        (
+            &["compare", "foliage-wall", "--safety", "0"][..],
+            "--safety",
+        ),
+    ] {
+        let o = radarnav(args);
+        assert!(!o.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
 }
 
 #[test]

@@ -6,13 +6,13 @@ use std::sync::Arc;
 
 use thiserror::Error;
 
+use crate::Scenario;
+use crate::map::PoseSource;
 use crate::map::{CoverageSample, MapConfig, MapError, Mapper, Truth};
 use crate::mission::{DEFAULT_CONTROLLER_HZ, Mission, MissionError, MissionKind};
 use crate::nav::{BumperConfig, ExploreMission, Side, Strategy};
-use crate::map::PoseSource;
 use crate::scenario::Robot;
 use crate::sim::{RunSettings, RunSummary, SimError, Simulation};
-use crate::Scenario;
 
 /// How often an exploration run samples its coverage, s.
 pub const COVERAGE_PERIOD: f64 = 1.0;

@@ -263,7 +263,7 @@ pub fn mapping_experiment(
         seed,
         ..RunSettings::of(scenario)
     };
-    let mut sim = Simulation::new(&scenario.world, robot, mission.controller(0)?, settings)?;
+    let mut sim = Simulation::new(&scenario.world, robot, mission.controller(seed)?, settings)?;
     let mut path = PathLog::default();
     let summary = match sim.run(&mut (mappers.as_mut_slice(), &mut path)) {
         Ok(s) => s,

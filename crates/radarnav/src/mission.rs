@@ -111,11 +111,9 @@ impl Mission {
                 Box::new(WaypointController::new(w.clone(), self.controller_hz))
             }
             MissionKind::Bug(b) => Box::new(BugController::new(b.clone(), self.controller_hz)),
-            MissionKind::Explore(e) => Box::new(ExploreController::new(
-                e.clone(),
-                self.controller_hz,
-                seed,
-            )),
+            MissionKind::Explore(e) => {
+                Box::new(ExploreController::new(e.clone(), self.controller_hz, seed))
+            }
         })
     }
 

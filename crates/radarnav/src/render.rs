@@ -511,7 +511,11 @@ pub fn pixmap_from_rgb(rgb: &[u8], width: u32, height: u32) -> Result<Pixmap, Re
     if rgb.len() != pixmap.data().len() / 4 * 3 {
         return Err(RenderError::Size(width, height));
     }
-    for (px, c) in pixmap.data_mut().chunks_exact_mut(4).zip(rgb.chunks_exact(3)) {
+    for (px, c) in pixmap
+        .data_mut()
+        .chunks_exact_mut(4)
+        .zip(rgb.chunks_exact(3))
+    {
         px.copy_from_slice(&[c[0], c[1], c[2], 255]);
     }
     Ok(pixmap)

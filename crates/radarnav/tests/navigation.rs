@@ -96,11 +96,22 @@ fn figure_13_and_14_scenarios_give_their_outcomes_with_both_algorithms_and_senso
 fn on_the_spiral_bug2_crosses_the_m_line_many_times_and_travels_farther_than_bug1() {
     let b1 = run_bug("bug-spiral", BugAlgorithm::Bug1, "radar", 1);
     let b2 = run_bug("bug-spiral", BugAlgorithm::Bug2, "radar", 1);
-    assert_eq!((b1.outcome, b2.outcome), (RunOutcome::Reached, RunOutcome::Reached));
+    assert_eq!(
+        (b1.outcome, b2.outcome),
+        (RunOutcome::Reached, RunOutcome::Reached)
+    );
     assert_eq!((b1.bumps, b2.bumps), (0, 0));
     let (r1, r2) = (report(&b1), report(&b2));
-    assert!(r2.mline_crossings >= 3, "bug2 crossed {} times", r2.mline_crossings);
-    assert!(r2.hit_points.len() >= 2, "bug2 met the spiral {} times", r2.hit_points.len());
+    assert!(
+        r2.mline_crossings >= 3,
+        "bug2 crossed {} times",
+        r2.mline_crossings
+    );
+    assert!(
+        r2.hit_points.len() >= 2,
+        "bug2 met the spiral {} times",
+        r2.hit_points.len()
+    );
     assert_eq!(r1.hit_points.len(), 1);
     assert!(
         b1.distance * 1.5 < b2.distance,
@@ -115,8 +126,212 @@ fn both_bugs_reach_the_goal_behind_the_foliage_hedge_with_the_radar() {
     for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
         for seed in 1..=2 {
             let s = run_bug("foliage-gap", algorithm, "radar", seed);
-            assert_eq!(s.outcome, RunOutcome::Reached, "{} seed {seed}", algorithm.as_str());
+            assert_eq!(
+                s.outcome,
+                RunOutcome::Reached,
+                "{} seed {seed}",
+                algorithm.as_str()
+            );
             assert_eq!(s.bumps, 0, "{} seed {seed}", algorithm.as_str());
+        }
+    }
+}
+
+/// A scenario with `objects` in a closed `w` × `h` hall, the robot at `start` (x, y, yaw°)
+/// with one sensor of `preset`, and `mission`.
+fn hall(
+    w: f64,
+    h: f64,
+    objects: &str,
+    start: (f64, f64, f64),
+    preset: &str,
+    mission: &str,
+) -> Scenario {
+    let src = format!(
+        r#"
+[sim]
+dt = 0.05
+duration = 120.0
+seed = 1
+
+[[object]]
+name = "hall"
+material = "concrete"
+wall = {{ points = [[-0.1, -0.1], [{w1}, -0.1], [{w1}, {h1}], [-0.1, {h1}], [-0.1, -0.1]], thickness = 0.2, height = 2.5 }}
+{objects}
+
+[[robot]]
+name = "p3at"
+vehicle = "p3at"
+start = {{ x = {}, y = {}, yaw_deg = {} }}
+
+[[robot.sensor]]
+name = "s"
+preset = "{preset}"
+mount = {{ x = 0.0, y = 0.0, z = 0.4 }}
+
+[mission]
+{mission}
+"#,
+        start.0,
+        start.1,
+        start.2,
+        w1 = w + 0.1,
+        h1 = h + 0.1,
+    );
+    Scenario::from_toml(&src, "test.toml", "test").expect("scenario")
+}
+
+/// Drives `s` for `seconds`, returning the true poses of every step and the summary.
+fn drive(s: &Scenario, seconds: f64, seed: u64) -> (Vec<radarnav::Pose>, RunSummary) {
+    struct Poses(Vec<radarnav::Pose>);
+    impl radarnav::sim::Observer for Poses {
+        type Error = std::convert::Infallible;
+        fn on_step(&mut self, step: &radarnav::sim::Step) -> Result<(), Self::Error> {
+            self.0.push(step.truth);
+            Ok(())
+        }
+    }
+    let settings = RunSettings {
+        duration: seconds,
+        seed,
+        ..RunSettings::of(s)
+    };
+    let controller = s
+        .mission
+        .as_ref()
+        .expect("mission")
+        .controller(seed)
+        .expect("controller");
+    let mut sim = Simulation::new(&s.world, &s.robots[0], controller, settings).expect("sim");
+    let mut poses = Poses(Vec::new());
+    let Ok(summary) = sim.run(&mut poses);
+    (poses.0, summary)
+}
+
+#[test]
+fn wall_following_keeps_the_side_distance_in_the_band_along_a_straight_wall() {
+    // The hall's south wall (inner face y = 0) on the robot's right; the far walls are 12 m
+    // away. Bumpers: 8 sectors, rule `all`, safety 1.27 m, band 0.5 m.
+    // Starts: converging from outside the band, and diverging from its inner edge.
+    for (preset, start) in [
+        ("radar_thesis", (3.0, 2.2, -8.0)),
+        ("radar_thesis", (3.0, 1.35, 8.0)),
+        ("hokuyo_utm30lx", (3.0, 2.2, -8.0)),
+        ("hokuyo_utm30lx", (3.0, 1.35, 8.0)),
+    ] {
+        let s = hall(
+            40.0,
+            12.0,
+            "",
+            start,
+            preset,
+            "explore = \"wall_follow\"\nfollow = \"right\"",
+        );
+        let (poses, summary) = drive(&s, 70.0, 1);
+        assert_eq!(summary.bumps, 0, "{preset}");
+        // After the first 10 s (settling from the start pose), until 4 m before the end wall.
+        let side: Vec<f64> = poses
+            .iter()
+            .skip(200)
+            .filter(|p| p.x < 36.0)
+            .map(|p| p.y)
+            .collect();
+        assert!(
+            side.len() > 500,
+            "{preset}: only {} steps along the wall",
+            side.len()
+        );
+        let (lo, hi) = side
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &y| (a.min(y), b.max(y)));
+        // The pressed band is [1.27, 1.77] m from the robot's centre; the follower may
+        // overshoot it by the distance it drives between two scans.
+        assert!(
+            lo > 1.27 - 0.1 && hi < 1.77 + 0.1,
+            "{preset}: side distance {lo:.2}..{hi:.2} m"
+        );
+        assert!(
+            poses.last().unwrap().x > 25.0,
+            "{preset}: drove along the wall"
+        );
+    }
+}
+
+#[test]
+fn wall_following_goes_round_a_box_at_its_convex_corners() {
+    // A 3 x 3 m box in a 20 x 20 m hall, on the robot's left.
+    let boxes = "[[object]]\nname = \"box\"\nmaterial = \"concrete\"\nbox = { center = [10.0, 10.0], size = [3.0, 3.0, 1.5] }";
+    for preset in ["radar_thesis", "hokuyo_utm30lx"] {
+        let s = hall(
+            20.0,
+            20.0,
+            boxes,
+            (10.0, 7.0, 0.0),
+            preset,
+            "explore = \"wall_follow\"\nfollow = \"left\"",
+        );
+        let (poses, summary) = drive(&s, 120.0, 1);
+        assert_eq!(summary.bumps, 0, "{preset}");
+        // The winding angle of the path round the box's centre: a full loop is 2π.
+        let mut wind = 0.0;
+        for w in poses.windows(2) {
+            let a = (w[0].y - 10.0).atan2(w[0].x - 10.0);
+            let b = (w[1].y - 10.0).atan2(w[1].x - 10.0);
+            wind += radarnav::pose::wrap_angle(b - a);
+        }
+        assert!(
+            wind > std::f64::consts::TAU,
+            "{preset}: wound {:.2} rad round the box",
+            wind
+        );
+        // Never nearer the box than the safety distance allows, never farther than a corner.
+        let near = poses
+            .iter()
+            .map(|p| ((p.x - 10.0).abs().max(1.5) - 1.5).hypot((p.y - 10.0).abs().max(1.5) - 1.5))
+            .fold(f64::MAX, f64::min);
+        assert!(near > 1.0, "{preset}: came within {near:.2} m of the box");
+    }
+}
+
+#[test]
+fn exploring_beside_foliage_with_the_radar_never_enters_it() {
+    // foliage-wall with its radar only: returns inside the hedge are obstacles to the bumpers.
+    let mut s = Scenario::builtin("foliage-wall").expect("built-in");
+    s.robots[0].sensors.retain(|m| m.name == "radar");
+    for strategy in ["wall_follow", "bounce"] {
+        let src = format!("explore = \"{strategy}\"");
+        let m = hall(1.0, 1.0, "", (0.5, 0.5, 0.0), "radar_thesis", &src).mission;
+        s.mission = m;
+        for seed in 1..=2 {
+            let (poses, summary) = drive(&s, 120.0, seed);
+            assert_eq!(
+                summary.bumps, 0,
+                "{strategy} seed {seed}: {:?}",
+                summary.bump_events
+            );
+            let foliage: Vec<usize> = s
+                .world
+                .objects()
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.name.as_deref().is_some_and(|n| n.starts_with("foliage")))
+                .map(|(i, _)| i)
+                .collect();
+            for p in &poses {
+                let body = s.robots[0].vehicle.body(p);
+                assert!(
+                    s.world
+                        .blocking_object(&body)
+                        .is_none_or(|i| !foliage.contains(&i)),
+                    "{strategy} seed {seed}: inside foliage at {p:?}"
+                );
+            }
+            assert!(
+                summary.distance > 15.0,
+                "{strategy} seed {seed}: drove {:.1} m",
+                summary.distance
+            );
         }
     }
 }

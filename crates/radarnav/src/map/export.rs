@@ -62,6 +62,8 @@ pub struct Overlay<'a> {
     /// The area to show (xy min, max); default: the known cells plus 1 m. Maps of one world
     /// drawn over the same area compare side by side.
     pub region: Option<(DVec2, DVec2)>,
+    /// Points to mark with a labelled cross (a navigation goal).
+    pub marks: Option<(&'a [DVec2], &'a str)>,
 }
 
 /// The map as a figure in the thesis' palette (cells outside the grid are unknown).
@@ -101,6 +103,9 @@ pub fn figure(
     if let Some((vehicle, start, end)) = overlay.robot {
         fig.draw_robot(&start, vehicle);
         fig.draw_robot(&end, vehicle);
+    }
+    if let Some((points, label)) = overlay.marks {
+        fig.draw_crosses(points, [220, 30, 30], label);
     }
     Ok(fig.finish(title))
 }

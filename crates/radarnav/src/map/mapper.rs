@@ -8,8 +8,8 @@ use std::sync::Arc;
 
 use super::MapError;
 use super::coverage::{CoverageSample, CoverageTrack};
-use super::truth::Truth;
 use super::grid::{Beam, Grid, Layers, Occupancy};
+use super::truth::Truth;
 use super::walk::CellIndex;
 use crate::pose::Pose;
 use crate::scenario::{MountedSensor, Robot};
@@ -144,7 +144,14 @@ impl Mapper {
         sensors: &[&str],
         config: MapConfig,
     ) -> Result<Self, MapError> {
-        Self::for_sensors(name, &robot.name, &robot.sensors, robot.vehicle, sensors, config)
+        Self::for_sensors(
+            name,
+            &robot.name,
+            &robot.sensors,
+            robot.vehicle,
+            sensors,
+            config,
+        )
     }
 
     /// A mapper named `name` fed by the sensors called `sensors` among `mounted`, the sensors

@@ -23,8 +23,8 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
-use super::{Recoil, nav_pose};
 use super::wall_follow::{Side, WallFollower};
+use super::{Recoil, nav_pose};
 use crate::map::PoseSource;
 use crate::pose::wrap_angle;
 use crate::sim::{ControlInput, Controller, Decision, Ending};
@@ -189,7 +189,10 @@ impl BugController {
         let u = d / len;
         let r = p - s;
         let along = r.dot(u);
-        (u.perp_dot(r), (-self.mission.loop_tolerance..=len).contains(&along))
+        (
+            u.perp_dot(r),
+            (-self.mission.loop_tolerance..=len).contains(&along),
+        )
     }
 }
 
@@ -200,7 +203,7 @@ impl Controller for BugController {
 
     fn update(&mut self, input: &ControlInput<'_>) -> Decision {
         let mut recoil = std::mem::take(&mut self.recoil);
-        let d = recoil.drive(input, self.rate_hz, || self.decide(input));
+        let d = recoil.drive(input, self.rate_hz, |bumped| self.decide(input, bumped));
         self.recoil = recoil;
         d
     }
@@ -211,7 +214,7 @@ impl Controller for BugController {
 }
 
 impl BugController {
-    fn decide(&mut self, input: &ControlInput<'_>) -> Decision {
+    fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let pose = nav_pose(self.mission.pose, input);
         let p = pose.xy();
         self.start.get_or_insert(p);
@@ -232,7 +235,7 @@ impl BugController {
         };
         // Hit: the bumper toward the goal trips. Leaving needs more: nothing at all in that
         // sector up to the band's far edge.
-        let hit = b.toward(heading) != BumperState::Clear;
+        let hit = bumped || b.toward(heading) != BumperState::Clear;
         let goal_blocked = b.nearest_toward(heading) <= self.bumpers.reach(input.vehicle);
         let tol = self.mission.loop_tolerance;
         let (side, within) = self.mline(p);
@@ -274,6 +277,9 @@ impl BugController {
                 Decision::Drive(DriveCommand::twist(v, omega))
             }
             Mode::Follow(bd) => {
+                if bumped {
+                    self.follower.bumped();
+                }
                 self.report.boundary_distance += step;
                 let from_hit = (p - bd.hit).length();
                 if from_hit > 2.0 * tol {

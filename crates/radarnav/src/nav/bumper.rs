@@ -47,9 +47,9 @@ impl BumperRule {
             "all" => Ok(Self::All),
             "any" => Ok(Self::Any),
             _ => {
-                let p = s
-                    .strip_prefix("fraction:")
-                    .ok_or_else(|| format!("unknown bumper rule `{s}`; known: all, any, fraction:p"))?;
+                let p = s.strip_prefix("fraction:").ok_or_else(|| {
+                    format!("unknown bumper rule `{s}`; known: all, any, fraction:p")
+                })?;
                 match p.parse::<f64>() {
                     Ok(p) if p > 0.0 && p <= 1.0 => Ok(Self::Fraction(p)),
                     _ => Err(format!(
@@ -131,7 +131,10 @@ impl BumperConfig {
     /// Checks the values.
     pub fn validate(&self) -> Result<(), String> {
         if self.sectors != 4 && self.sectors != 8 {
-            return Err(format!("`sectors`: expected 4 or 8, found {}", self.sectors));
+            return Err(format!(
+                "`sectors`: expected 4 or 8, found {}",
+                self.sectors
+            ));
         }
         if let Some(s) = self.safety
             && !(s > 0.0 && s.is_finite())
@@ -139,7 +142,10 @@ impl BumperConfig {
             return Err(format!("`safety`: expected a number > 0, found {s}"));
         }
         if !(self.band > 0.0 && self.band.is_finite()) {
-            return Err(format!("`band`: expected a number > 0, found {}", self.band));
+            return Err(format!(
+                "`band`: expected a number > 0, found {}",
+                self.band
+            ));
         }
         Ok(())
     }
@@ -163,7 +169,14 @@ pub struct Bumpers {
 impl Bumpers {
     /// Bumpers from `scan` of a sensor mounted at `mount` on the robot, with `safety` and
     /// `band` in metres from the robot's centre.
-    pub fn sense(scan: &Scan, mount: &Pose, sectors: usize, safety: f64, band: f64, rule: BumperRule) -> Self {
+    pub fn sense(
+        scan: &Scan,
+        mount: &Pose,
+        sectors: usize,
+        safety: f64,
+        band: f64,
+        rule: BumperRule,
+    ) -> Self {
         let width = TAU / sectors as f64;
         let mut rays = vec![0usize; sectors];
         let mut close = vec![0usize; sectors];
@@ -298,14 +311,16 @@ fn sector_index(angle: f64, width: f64, sectors: usize) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::sensor::{Beam, HitKind, SensorKind};
 
     /// A full-circle scan of `n` rays whose range is `f(azimuth)`.
     pub(crate) fn ring_scan(n: usize, f: impl Fn(f64) -> f32) -> Scan {
         let inc = TAU / n as f64;
-        let ranges: Vec<f32> = (0..n).map(|i| f(-std::f64::consts::PI + i as f64 * inc)).collect();
+        let ranges: Vec<f32> = (0..n)
+            .map(|i| f(-std::f64::consts::PI + i as f64 * inc))
+            .collect();
         Scan {
             stamp: 0.0,
             kind: SensorKind::Radar,
@@ -338,9 +353,20 @@ mod tests {
     #[test]
     fn rule_parsing() {
         assert_eq!(BumperRule::parse("all"), Ok(BumperRule::All));
-        assert_eq!(BumperRule::parse("fraction:0.75"), Ok(BumperRule::Fraction(0.75)));
-        assert!(BumperRule::parse("fraction:0").unwrap_err().contains("(0, 1]"));
-        assert!(BumperRule::parse("most").unwrap_err().contains("known: all, any"));
+        assert_eq!(
+            BumperRule::parse("fraction:0.75"),
+            Ok(BumperRule::Fraction(0.75))
+        );
+        assert!(
+            BumperRule::parse("fraction:0")
+                .unwrap_err()
+                .contains("(0, 1]")
+        );
+        assert!(
+            BumperRule::parse("most")
+                .unwrap_err()
+                .contains("known: all, any")
+        );
         assert_eq!(BumperRule::Fraction(0.5).to_string(), "fraction:0.5");
     }
 
@@ -361,16 +387,40 @@ mod tests {
         assert_eq!(any.state(3), BumperState::Pressed);
         assert_eq!(any.state(0), BumperState::Clear);
         // Nearer than the safety distance: too close, whatever the rule.
-        let near = Bumpers::sense(&ring_scan(360, left_wall(1.0)), &Pose::default(), 8, 1.27, 0.5, BumperRule::All);
+        let near = Bumpers::sense(
+            &ring_scan(360, left_wall(1.0)),
+            &Pose::default(),
+            8,
+            1.27,
+            0.5,
+            BumperRule::All,
+        );
         assert_eq!(near.state(2), BumperState::TooClose);
-        assert_eq!(near.toward(std::f64::consts::FRAC_PI_2), BumperState::TooClose);
+        assert_eq!(
+            near.toward(std::f64::consts::FRAC_PI_2),
+            BumperState::TooClose
+        );
         // Four sectors of 90°: the left one's edge rays reach 1.4 / sin 45° = 1.98 m > band.
         let four = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::All);
         assert_eq!(four.state(1), BumperState::Clear);
-        let frac = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::Fraction(0.6));
+        let frac = Bumpers::sense(
+            &s,
+            &Pose::default(),
+            4,
+            1.27,
+            0.5,
+            BumperRule::Fraction(0.6),
+        );
         // In band from 1.4 up to 1.77 m: |angle − 90°| ≤ acos(1.4/1.77) = 37.7°, 84 % of 90°.
         assert_eq!(frac.state(1), BumperState::Pressed);
-        let strict = Bumpers::sense(&s, &Pose::default(), 4, 1.27, 0.5, BumperRule::Fraction(0.9));
+        let strict = Bumpers::sense(
+            &s,
+            &Pose::default(),
+            4,
+            1.27,
+            0.5,
+            BumperRule::Fraction(0.9),
+        );
         assert_eq!(strict.state(1), BumperState::Clear);
     }
 
@@ -409,13 +459,22 @@ mod tests {
         let b = Bumpers::sense(&s, &Pose::default(), 4, 1.0, 0.5, BumperRule::All);
         assert_eq!(b.state(2), BumperState::Clear);
         assert_eq!(b.state(0), BumperState::Pressed);
-        let c = BumperConfig { sectors: 6, ..Default::default() };
+        let c = BumperConfig {
+            sectors: 6,
+            ..Default::default()
+        };
         assert!(c.validate().unwrap_err().contains("4 or 8"));
         let p3at = crate::vehicle::vehicle("p3at").unwrap();
         assert!((BumperConfig::default().safety_for(p3at) - 1.27).abs() < 1e-9);
-        let named = BumperConfig { sensor: Some("laser".into()), ..Default::default() };
+        let named = BumperConfig {
+            sensor: Some("laser".into()),
+            ..Default::default()
+        };
         assert_eq!(named.sensor_index(["radar", "laser"].into_iter()), Some(1));
-        assert_eq!(BumperConfig::default().sensor_index(["radar"].into_iter()), Some(0));
+        assert_eq!(
+            BumperConfig::default().sensor_index(["radar"].into_iter()),
+            Some(0)
+        );
         assert_eq!(named.sensor_index(["radar"].into_iter()), None);
     }
 }

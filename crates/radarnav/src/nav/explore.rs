@@ -42,7 +42,16 @@ const GIVE_UP_AFTER: f64 = 6.0;
 /// unknown until the scans have swept it.
 const MIN_FRONTIER_DISTANCE: f64 = 1.0;
 /// The 8 neighbours of a cell.
-const NEIGHBOURS: [(i64, i64); 8] = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)];
+const NEIGHBOURS: [(i64, i64); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (1, -1),
+    (-1, 1),
+    (-1, -1),
+];
 /// Look-ahead along the planned path, m.
 const LOOKAHEAD: f64 = 0.6;
 
@@ -121,7 +130,9 @@ impl ExploreController {
     pub fn new(mission: ExploreMission, rate_hz: f64, seed: u64) -> Self {
         let phase = match mission.strategy {
             Strategy::Bounce => Phase::Straight,
-            Strategy::WallFollow => Phase::Wall { until: f64::INFINITY },
+            Strategy::WallFollow => Phase::Wall {
+                until: f64::INFINITY,
+            },
             Strategy::Spiral => Phase::Spiral { turned: 0.0 },
             Strategy::Frontier => Phase::Path,
         };
@@ -137,7 +148,7 @@ impl ExploreController {
         }
     }
 
-    fn decide(&mut self, input: &ControlInput<'_>) -> Decision {
+    fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let dt = 1.0 / self.rate_hz;
         if self.mission.strategy == Strategy::Frontier {
             self.map_scans(input);
@@ -147,7 +158,7 @@ impl ExploreController {
         };
         let speed = self.mission.speed;
         let radius = self.bumpers.follow_radius(input.vehicle);
-        let front_blocked = front_trips(&b);
+        let front_blocked = bumped || front_trips(&b);
         match &mut self.phase {
             Phase::Straight => {
                 if front_blocked {
@@ -189,12 +200,15 @@ impl ExploreController {
                 Decision::Drive(DriveCommand::twist(speed, omega))
             }
             Phase::Wall { until } => {
+                if bumped {
+                    self.follower.bumped();
+                }
                 if input.time >= *until && !front_blocked {
                     self.phase = Phase::Spiral { turned: 0.0 };
                 }
                 Decision::Drive(self.follower.command(&b, dt, radius))
             }
-            Phase::Path => self.frontier_step(input, &b),
+            Phase::Path => self.frontier_step(input, &b, front_blocked),
         }
     }
 
@@ -206,8 +220,15 @@ impl ExploreController {
                 resolution: FRONTIER_RESOLUTION,
                 ..MapConfig::default()
             };
-            let mapper = Mapper::for_sensors("frontier", "robot", input.sensors, input.vehicle, &names, config)
-                .ok();
+            let mapper = Mapper::for_sensors(
+                "frontier",
+                "robot",
+                input.sensors,
+                input.vehicle,
+                &names,
+                config,
+            )
+            .ok();
             Frontier {
                 mapper,
                 stamps: vec![f64::NEG_INFINITY; input.sensors.len()],
@@ -239,7 +260,7 @@ impl ExploreController {
         }
     }
 
-    fn frontier_step(&mut self, input: &ControlInput<'_>, b: &Bumpers) -> Decision {
+    fn frontier_step(&mut self, input: &ControlInput<'_>, b: &Bumpers, blocked: bool) -> Decision {
         let pose = nav_pose(self.mission.pose, input);
         let keep_off = self.bumpers.reach(input.vehicle) - self.mission.bumpers.band / 2.0;
         let speed = self.mission.speed;
@@ -254,7 +275,7 @@ impl ExploreController {
             return Decision::Drive(DriveCommand::STOP);
         }
         // Blocked ahead: give the target up, plan anew.
-        if front_trips(b) && !f.path.is_empty() {
+        if blocked && !f.path.is_empty() {
             if let Some(t) = f.target {
                 f.rejected.push(t);
             }
@@ -291,10 +312,17 @@ impl ExploreController {
         }
         let err = wrap_angle((aim - here).to_angle() - pose.yaw);
         let omega = (1.5 * err).clamp(-TURN_RATE, TURN_RATE);
-        let v = if err.abs() > 0.52 { 0.0 } else { speed * err.cos() };
+        let v = if err.abs() > 0.52 {
+            0.0
+        } else {
+            speed * err.cos()
+        };
         // Turning on the spot with the front tripped is safe; driving on is not.
         if front_trips(b) {
-            return Decision::Drive(DriveCommand::twist(0.0, self.mission.follow.sign() * -TURN_RATE));
+            return Decision::Drive(DriveCommand::twist(
+                0.0,
+                self.mission.follow.sign() * -TURN_RATE,
+            ));
         }
         Decision::Drive(DriveCommand::twist(v, omega))
     }
@@ -317,7 +345,7 @@ impl Controller for ExploreController {
 
     fn update(&mut self, input: &ControlInput<'_>) -> Decision {
         let mut recoil = std::mem::take(&mut self.recoil);
-        let d = recoil.drive(input, self.rate_hz, || self.decide(input));
+        let d = recoil.drive(input, self.rate_hz, |bumped| self.decide(input, bumped));
         self.recoil = recoil;
         d
     }
@@ -364,7 +392,8 @@ impl Frontier {
             }
         }
         let at = |i: i64, j: i64| -> Option<usize> {
-            (i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h).then(|| j as usize * w + i as usize)
+            (i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h)
+                .then(|| j as usize * w + i as usize)
         };
         let start_cell = grid.cell_of(from);
         let start = at(start_cell.0 - oi, start_cell.1 - oj)?;
@@ -380,7 +409,9 @@ impl Frontier {
             let (i, j) = ((k % w) as i64, (k / w) as i64);
             NEIGHBOURS
                 .iter()
-                .filter(|(di, dj)| at(i + di, j + dj).is_none_or(|n| classes[n] == CellClass::Unknown))
+                .filter(|(di, dj)| {
+                    at(i + di, j + dj).is_none_or(|n| classes[n] == CellClass::Unknown)
+                })
                 .count()
                 >= 3
         };
@@ -397,7 +428,10 @@ impl Frontier {
         while let Some(k) = queue.pop_front() {
             if steps[k] >= min_steps
                 && is_frontier(k)
-                && !self.rejected.iter().any(|r| (*r - centre(k)).length() < 1.0)
+                && !self
+                    .rejected
+                    .iter()
+                    .any(|r| (*r - centre(k)).length() < 1.0)
             {
                 found = Some(k);
                 break;
@@ -432,5 +466,93 @@ impl Frontier {
         }
         self.target = Some(end);
         Some(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nav::bumper::tests::ring_scan;
+    use crate::pose::Pose;
+    use crate::scenario::MountedSensor;
+    use crate::sensor::preset;
+
+    /// A frontier planner whose map holds five scans from the origin of a 3 m ring of walls,
+    /// open (no return) for |azimuth| < `gap_deg`.
+    fn planner(gap_deg: f64) -> Frontier {
+        let sensors = [MountedSensor {
+            name: "radar".into(),
+            config: preset("radar_thesis").unwrap(),
+            mount: Pose::default(),
+        }];
+        let vehicle = crate::vehicle::vehicle("p3at").unwrap();
+        let config = MapConfig {
+            resolution: FRONTIER_RESOLUTION,
+            ..MapConfig::default()
+        };
+        let mut mapper =
+            Mapper::for_sensors("f", "r", &sensors, vehicle, &["radar"], config).unwrap();
+        let scan = ring_scan(720, |a: f64| {
+            if a.abs().to_degrees() < gap_deg {
+                f32::INFINITY
+            } else {
+                3.0
+            }
+        });
+        // At scan height: returns of a plane at the floor would not be obstacles.
+        let sensor = Pose::new(0.0, 0.0, 0.4, 0.0);
+        for _ in 0..5 {
+            mapper.insert_scan(&scan, &sensor);
+        }
+        Frontier {
+            mapper: Some(mapper),
+            stamps: vec![0.0],
+            path: Vec::new(),
+            next_plan: 0.0,
+            rejected: Vec::new(),
+            target: None,
+            failing_since: None,
+            done: false,
+        }
+    }
+
+    #[test]
+    fn the_nearest_frontier_is_where_the_walls_open() {
+        let mut f = planner(20.0);
+        assert!(f.plan(DVec2::ZERO, 0.5).is_some());
+        let t = f.target.unwrap();
+        // Beyond the ring's radius, inside the opening.
+        assert!(
+            t.length() > 2.9 && t.to_angle().abs().to_degrees() < 21.0,
+            "{t}"
+        );
+        // The path starts near the robot, ends at the target and keeps off the walls.
+        assert!(f.path[0].length() < 0.5 && *f.path.last().unwrap() == t);
+        assert!(
+            f.path
+                .iter()
+                .all(|p| p.length() < 2.6 || p.to_angle().abs() < 0.35)
+        );
+        // A rejected target is not chosen again.
+        f.rejected.push(t);
+        assert!(f.plan(DVec2::ZERO, 0.5).is_some());
+        assert!((f.target.unwrap() - t).length() >= 1.0);
+    }
+
+    #[test]
+    fn a_closed_ring_has_no_frontier() {
+        let mut f = planner(0.0);
+        assert!(f.plan(DVec2::ZERO, 0.5).is_none());
+        // Nor does a ring whose opening is narrower than the robot's keep-off circle.
+        let mut narrow = planner(4.0);
+        assert!(narrow.plan(DVec2::ZERO, 0.5).is_none());
+    }
+
+    #[test]
+    fn strategies_parse_by_name() {
+        for s in Strategy::ALL {
+            assert_eq!(Strategy::parse(s.as_str()), Some(s));
+        }
+        assert_eq!(Strategy::parse("zigzag"), None);
     }
 }

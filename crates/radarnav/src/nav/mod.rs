@@ -9,8 +9,8 @@ pub mod wall_follow;
 mod waypoints;
 
 pub use bug::{BugAlgorithm, BugController, BugMission, BugReport};
-pub use explore::{ExploreController, ExploreMission, Strategy};
 pub use bumper::{BumperConfig, BumperRule, BumperSensor, BumperState, Bumpers};
+pub use explore::{ExploreController, ExploreMission, Strategy};
 pub use teleop::TeleopController;
 pub use wall_follow::{FollowRule, Side, WallFollower};
 pub use waypoints::WaypointController;
@@ -29,34 +29,43 @@ pub fn nav_pose(source: PoseSource, input: &ControlInput<'_>) -> Pose {
 }
 
 /// The reflex of a real bumper: after a refused move, back away from what was hit for a
-/// moment (forward if the robot hit something while reversing) before the behaviour resumes.
+/// moment (forward if the robot hit something while reversing) before the behaviour resumes,
+/// told that it bumped: the sensor missed something (foliage the radar crosses whole), so
+/// the way it was going is blocked.
 #[derive(Clone, Debug, Default)]
 pub struct Recoil {
     remaining: u32,
     speed: f64,
     last_v: f64,
+    recoiled: bool,
 }
 
 /// How long a recoil lasts, s, and its speed, m/s.
 const RECOIL: (f64, f64) = (0.6, 0.2);
 
 impl Recoil {
-    /// Wraps the behaviour `decide`: runs it unless the robot is recoiling from a bump.
+    /// Wraps the behaviour `decide`: runs it unless the robot is recoiling from a bump. Its
+    /// argument is true on the first call after a recoil.
     pub fn drive(
         &mut self,
         input: &ControlInput<'_>,
         rate_hz: f64,
-        decide: impl FnOnce() -> Decision,
+        decide: impl FnOnce(bool) -> Decision,
     ) -> Decision {
         if input.bumped && self.remaining == 0 {
             self.remaining = (RECOIL.0 * rate_hz).ceil() as u32;
-            self.speed = if self.last_v > 0.0 { -RECOIL.1 } else { RECOIL.1 };
+            self.speed = if self.last_v > 0.0 {
+                -RECOIL.1
+            } else {
+                RECOIL.1
+            };
+            self.recoiled = true;
         }
         if self.remaining > 0 {
             self.remaining -= 1;
             return Decision::Drive(DriveCommand::twist(self.speed, 0.0));
         }
-        let d = decide();
+        let d = decide(std::mem::take(&mut self.recoiled));
         if let Decision::Drive(DriveCommand::Twist(t)) = d {
             self.last_v = t.v;
         }

@@ -47,6 +47,8 @@ impl Controller for TeleopController {
         let i = self.ends.partition_point(|&end| end <= input.time + 1e-9);
         self.steps
             .get(i)
-            .map_or(Decision::Finished(Ending::Completed), |s| Decision::Drive(s.command))
+            .map_or(Decision::Finished(Ending::Completed), |s| {
+                Decision::Drive(s.command)
+            })
     }
 }

@@ -20,6 +20,9 @@ use std::f64::consts::TAU;
 use super::bumper::{BumperState, Bumpers};
 use crate::vehicle::DriveCommand;
 
+/// How far the follower turns away after a bump, rad (45°).
+pub const BUMP_TURN: f64 = std::f64::consts::FRAC_PI_4;
+
 /// Which side the wall is kept on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Side {
@@ -79,6 +82,7 @@ pub struct WallFollower {
     turn_rate: f64,
     found: bool,
     lost_turn: f64,
+    bump_turn: f64,
     rule: FollowRule,
 }
 
@@ -92,6 +96,7 @@ impl WallFollower {
             turn_rate,
             found: false,
             lost_turn: 0.0,
+            bump_turn: 0.0,
             rule: FollowRule::Search,
         }
     }
@@ -112,6 +117,12 @@ impl WallFollower {
         self.lost_turn = 0.0;
     }
 
+    /// The robot bumped into something its sensor missed: turn away from the wall side on
+    /// the spot by [`BUMP_TURN`] before following on.
+    pub fn bumped(&mut self) {
+        self.bump_turn = BUMP_TURN;
+    }
+
     /// The command for the coming `dt` seconds; convex corners are rounded on circles of
     /// `radius` metres (the wanted wall distance, [`super::BumperSensor::follow_radius`]).
     pub fn command(&mut self, b: &Bumpers, dt: f64, radius: f64) -> DriveCommand {
@@ -126,17 +137,28 @@ impl WallFollower {
         if b.states().iter().any(|&x| x != BumperState::Clear) {
             self.found = true;
         }
-        let (rule, v, omega) = if blocked(front) || diag == Some(BumperState::TooClose) {
+        let (rule, v, omega) = if self.bump_turn > 0.0 {
+            self.bump_turn -= self.turn_rate * dt;
+            (FollowRule::TurnAway, 0.0, -s * self.turn_rate)
+        } else if blocked(front) || diag == Some(BumperState::TooClose) {
             (FollowRule::TurnAway, 0.0, -s * self.turn_rate)
         } else if !self.found {
             (FollowRule::Search, self.speed, 0.0)
         } else if wall == BumperState::TooClose || diag == Some(BumperState::Pressed) {
-            (FollowRule::VeerAway, 0.5 * self.speed, -0.5 * s * self.turn_rate)
+            (
+                FollowRule::VeerAway,
+                0.5 * self.speed,
+                -0.5 * s * self.turn_rate,
+            )
         } else if wall == BumperState::Pressed {
             (FollowRule::Along, self.speed, 0.0)
         } else {
             let v = 0.6 * self.speed;
-            (FollowRule::TowardWall, v, s * (v / radius).min(self.turn_rate))
+            (
+                FollowRule::TowardWall,
+                v,
+                s * (v / radius).min(self.turn_rate),
+            )
         };
         if rule == FollowRule::TowardWall {
             self.lost_turn += omega.abs() * dt;
@@ -149,5 +171,85 @@ impl WallFollower {
         }
         self.rule = rule;
         DriveCommand::twist(v, omega)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nav::bumper::BumperRule;
+    use crate::nav::bumper::tests::ring_scan;
+    use crate::pose::Pose;
+    use crate::vehicle::Twist;
+
+    /// Bumpers of a full-circle scan of a straight wall at distance `d` in direction `dir`
+    /// (rad from the front), or of nothing.
+    fn wall(d: Option<f64>, dir: f64) -> Bumpers {
+        let scan = ring_scan(360, |a: f64| match d {
+            Some(d) if (a - dir).cos() > 1e-9 => (d / (a - dir).cos()) as f32,
+            _ => f32::INFINITY,
+        });
+        Bumpers::sense(&scan, &Pose::default(), 8, 1.27, 0.5, BumperRule::All)
+    }
+
+    fn twist(c: DriveCommand) -> Twist {
+        match c {
+            DriveCommand::Twist(t) => t,
+            DriveCommand::Tracks { .. } => panic!("twist expected"),
+        }
+    }
+
+    #[test]
+    fn each_rule_on_its_bumper_states() {
+        use std::f64::consts::FRAC_PI_2;
+        let mut f = WallFollower::new(Side::Right, 0.4, 0.8);
+        let step = |f: &mut WallFollower, b: &Bumpers| {
+            let t = twist(f.command(b, 0.1, 1.5));
+            (f.rule(), t.v, t.omega)
+        };
+        // Nothing anywhere: search straight ahead.
+        assert_eq!(
+            step(&mut f, &wall(None, 0.0)),
+            (FollowRule::Search, 0.4, 0.0)
+        );
+        // The wall on the right, in the band: along it.
+        assert_eq!(
+            step(&mut f, &wall(Some(1.4), -FRAC_PI_2)),
+            (FollowRule::Along, 0.4, 0.0)
+        );
+        // Too close on the right (1.2 m; the diagonal, 1.2 / cos 22.5° = 1.3 m, is not):
+        // veer left while creeping.
+        let (r, v, w) = step(&mut f, &wall(Some(1.2), -FRAC_PI_2));
+        assert_eq!(r, FollowRule::VeerAway);
+        assert!(v > 0.0 && w > 0.0);
+        // A wall ahead (concave corner): turn left on the spot.
+        let (r, v, w) = step(&mut f, &wall(Some(1.4), 0.0));
+        assert_eq!((r, v), (FollowRule::TurnAway, 0.0));
+        assert!(w > 0.0);
+        // The wall lost after it was found: arc right on a 1.5 m circle.
+        let (r, v, w) = step(&mut f, &wall(None, 0.0));
+        assert_eq!(r, FollowRule::TowardWall);
+        assert!((w + v / 1.5).abs() < 1e-12, "{v} {w}");
+        // A full circle of that without a wall: back to searching.
+        for _ in 0..400 {
+            f.command(&wall(None, 0.0), 0.1, 1.5);
+        }
+        assert_eq!(f.rule(), FollowRule::Search);
+        // After a bump: turn away by 45° before anything else.
+        f.bumped();
+        let (r, v, w) = step(&mut f, &wall(Some(1.4), -FRAC_PI_2));
+        assert_eq!((r, v), (FollowRule::TurnAway, 0.0));
+        assert!(w > 0.0);
+        let mut turns = 1;
+        while step(&mut f, &wall(Some(1.4), -FRAC_PI_2)).0 == FollowRule::TurnAway {
+            turns += 1;
+        }
+        assert_eq!(turns, (BUMP_TURN / 0.08).ceil() as usize);
+        // The mirror image for a wall on the left.
+        let mut l = WallFollower::new(Side::Left, 0.4, 0.8);
+        l.engage();
+        let (r, _, w) = step(&mut l, &wall(Some(1.2), FRAC_PI_2));
+        assert_eq!(r, FollowRule::VeerAway);
+        assert!(w < 0.0);
     }
 }

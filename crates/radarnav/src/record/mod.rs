@@ -332,6 +332,7 @@ impl Recorder {
                 path: &truth,
                 robot: Some((robot.vehicle, robot.start, summary.final_pose)),
                 region: Some(world_region(&scenario.world)),
+                marks: None,
             };
             let stem = format!("map_{}", m.name());
             self.written.extend(export::write_all(

@@ -32,11 +32,11 @@ use thiserror::Error;
 use toml::Spanned;
 
 use crate::map::PoseSource;
-use crate::nav::{
-    BugAlgorithm, BugMission, BumperConfig, BumperRule, ExploreMission, Side, Strategy,
-};
 use crate::mission::{
     DEFAULT_CONTROLLER_HZ, Mission, MissionKind, TeleopSource, TeleopStep, WaypointMission,
+};
+use crate::nav::{
+    BugAlgorithm, BugMission, BumperConfig, BumperRule, ExploreMission, Side, Strategy,
 };
 use crate::pose::Pose;
 use crate::sensor::{SensorConfig, preset};
@@ -651,6 +651,7 @@ fn build_mission(
             })
         }
         "bug1" | "bug2" => {
+            let nav = NavKeys::of(ctx, spec, robots, span.clone())?;
             let Some(goal) = &spec.goal else {
                 return Err(ctx.err(span, Some("goal"), "a bug mission needs a `goal = [x, y]`"));
             };
@@ -664,10 +665,10 @@ fn build_mission(
                 tolerance: spec.tolerance.map_or(0.3, |v| v.0),
                 mline_tolerance: spec.mline_tolerance.map_or(0.1, |v| v.0),
                 loop_tolerance: spec.loop_tolerance.map_or(0.75, |v| v.0),
-                follow: follow_side(ctx, spec)?,
-                speed: spec.speed.map_or(0.4, |v| v.0),
-                pose: nav_pose(ctx, spec)?,
-                bumpers: bumper_config(ctx, spec, &robots[robot_index(spec, robots)], span.clone())?,
+                follow: nav.follow,
+                speed: nav.speed,
+                pose: nav.pose,
+                bumpers: nav.bumpers,
             })
         }
         "explore" => {
@@ -688,12 +689,13 @@ fn build_mission(
                     ),
                 )
             })?;
+            let nav = NavKeys::of(ctx, spec, robots, span.clone())?;
             MissionKind::Explore(ExploreMission {
                 strategy,
-                speed: spec.speed.map_or(0.4, |v| v.0),
-                follow: follow_side(ctx, spec)?,
-                pose: nav_pose(ctx, spec)?,
-                bumpers: bumper_config(ctx, spec, &robots[robot_index(spec, robots)], span.clone())?,
+                speed: nav.speed,
+                follow: nav.follow,
+                pose: nav.pose,
+                bumpers: nav.bumpers,
             })
         }
         other => {
@@ -711,6 +713,30 @@ fn build_mission(
         controller_hz: spec.controller_hz.map_or(DEFAULT_CONTROLLER_HZ, |v| v.0),
         kind,
     })
+}
+
+/// The keys Bug and exploration missions share.
+struct NavKeys {
+    speed: f64,
+    follow: Side,
+    pose: PoseSource,
+    bumpers: BumperConfig,
+}
+
+impl NavKeys {
+    fn of(
+        ctx: &Ctx,
+        spec: &MissionSpec,
+        robots: &[Robot],
+        span: Range<usize>,
+    ) -> Result<Self, ScenarioError> {
+        Ok(Self {
+            speed: spec.speed.map_or(0.4, |v| v.0),
+            follow: follow_side(ctx, spec)?,
+            pose: nav_pose(ctx, spec)?,
+            bumpers: bumper_config(ctx, spec, &robots[robot_index(spec, robots)], span)?,
+        })
+    }
 }
 
 /// Index of the robot the mission names (the first when it names none; names are checked).

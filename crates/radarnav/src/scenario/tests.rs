@@ -316,3 +316,101 @@ proptest::proptest! {
         }
     }
 }
+
+const SENSING: &str = "[[robot]]\nname = \"r\"\nstart = { x = 1.0, y = 2.0 }\n[[robot.sensor]]\nname = \"radar\"\npreset = \"radar_thesis\"\n[[robot.sensor]]\nname = \"laser\"\npreset = \"sick_lms291\"\n";
+
+#[test]
+fn bug_and_explore_missions_parse_with_defaults_and_bumpers() {
+    use crate::nav::{BugAlgorithm, BumperRule, Side, Strategy};
+    let s = parse(&format!(
+        "{SENSING}[mission]\ntype = \"bug2\"\ngoal = [5, 6]\n"
+    ))
+    .unwrap();
+    let MissionKind::Bug(b) = s.mission.unwrap().kind else {
+        panic!("bug expected")
+    };
+    assert_eq!(b.algorithm, BugAlgorithm::Bug2);
+    assert_eq!(b.goal, DVec2::new(5.0, 6.0));
+    assert_eq!(
+        (b.tolerance, b.mline_tolerance, b.loop_tolerance, b.speed),
+        (0.3, 0.1, 0.75, 0.4)
+    );
+    assert_eq!((b.follow, b.pose), (Side::Left, PoseSource::Odometry));
+    assert_eq!(b.bumpers, BumperConfig::default());
+    let s = parse(&format!(
+        "{SENSING}[mission]\nexplore = \"frontier\"\nfollow = \"right\"\npose = \"truth\"\n[mission.bumpers]\nsectors = 4\nsafety = 1.6\nband = 0.3\nrule = \"fraction:0.8\"\nsensor = \"laser\"\n"
+    ))
+    .unwrap();
+    let m = s.mission.unwrap();
+    assert_eq!(m.kind_name(), "explore");
+    let MissionKind::Explore(e) = m.kind else {
+        panic!("explore expected")
+    };
+    assert_eq!(
+        (e.strategy, e.follow, e.pose),
+        (Strategy::Frontier, Side::Right, PoseSource::Truth)
+    );
+    assert_eq!(
+        e.bumpers,
+        BumperConfig {
+            sectors: 4,
+            safety: Some(1.6),
+            band: 0.3,
+            rule: BumperRule::Fraction(0.8),
+            sensor: Some("laser".into()),
+        }
+    );
+    // `type = "explore"` with the strategy is the same mission.
+    let t = parse(&format!(
+        "{SENSING}[mission]\ntype = \"explore\"\nexplore = \"spiral\"\n"
+    ))
+    .unwrap();
+    assert_eq!(t.mission.unwrap().kind_name(), "explore");
+}
+
+#[test]
+fn bug_and_explore_mission_errors_name_the_key() {
+    let e = |tail: &str| err(&format!("{SENSING}[mission]\n{tail}"));
+    let x = e("type = \"bug1\"\n");
+    assert_eq!(x.key.as_deref(), Some("goal"));
+    let x = e("type = \"bug1\"\ngoal = [1, 1]\npoints = [[1, 1]]\n");
+    assert_eq!(x.key.as_deref(), Some("points"));
+    assert!(x.message.contains("not a key of a `bug1` mission"), "{x}");
+    let x = e("type = \"bug2\"\ngoal = [1, 1]\nfollow = \"up\"\n");
+    assert_eq!((x.line, x.key.as_deref()), (13, Some("follow")));
+    let x = e("type = \"bug2\"\ngoal = [1, 1]\npose = \"gps\"\n");
+    assert!(x.message.contains("`odometry` or `truth`"), "{x}");
+    let x = e("explore = \"zigzag\"\n");
+    assert_eq!((x.line, x.key.as_deref()), (11, Some("explore")));
+    assert!(
+        x.message
+            .contains("known: bounce, wall_follow, spiral, frontier"),
+        "{x}"
+    );
+    let x = e("explore = \"bounce\"\ngoal = [1, 1]\n");
+    assert_eq!(x.key.as_deref(), Some("goal"));
+    let x = e("type = \"explore\"\n");
+    assert!(x.message.contains("needs `explore"), "{x}");
+    let x = e("speed = 1\n");
+    assert!(x.message.contains("needs `type`"), "{x}");
+    let x = e("explore = \"bounce\"\n[mission.bumpers]\nsectors = 6\n");
+    assert_eq!((x.line, x.key.as_deref()), (13, Some("sectors")));
+    let x = e("explore = \"bounce\"\n[mission.bumpers]\nrule = \"most\"\n");
+    assert_eq!(x.key.as_deref(), Some("rule"));
+    let x = e("explore = \"bounce\"\n[mission.bumpers]\nsensor = \"sonar\"\n");
+    assert!(
+        x.message
+            .contains("no sensor `sonar`; sensors: radar, laser"),
+        "{x}"
+    );
+    let x = e("explore = \"bounce\"\n[mission.bumpers]\nbumpers = 3\n");
+    assert!(x.message.contains("unknown field"), "{x}");
+    let x = err(&format!("{ROBOT}[mission]\nexplore = \"bounce\"\n"));
+    assert!(x.message.contains("no sensor to feed the bumpers"), "{x}");
+    let x = e("type = \"hover\"\n");
+    assert!(
+        x.message
+            .contains("known: teleop, waypoints, bug1, bug2, explore"),
+        "{x}"
+    );
+}
