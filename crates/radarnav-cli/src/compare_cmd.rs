@@ -289,17 +289,13 @@ fn plot(dir: &Path, s: &Scenario, results: &[ExploreResult]) -> Result<std::path
             .map_err(draw_err)?;
         let panels = root.split_evenly((1, 2));
         let groups = groups(results);
-        let strategies: Vec<&str> = {
-            let mut v: Vec<&str> = results.iter().map(|r| r.job.strategy.as_str()).collect();
-            v.dedup();
-            let mut seen = Vec::new();
-            for x in v {
-                if !seen.contains(&x) {
-                    seen.push(x);
-                }
+        // One colour per strategy, in the order asked.
+        let mut strategies: Vec<&str> = Vec::new();
+        for r in results {
+            if !strategies.contains(&r.job.strategy.as_str()) {
+                strategies.push(r.job.strategy.as_str());
             }
-            seen
-        };
+        }
         for (panel, hidden) in panels.iter().zip([false, true]) {
             let mut chart = ChartBuilder::on(panel)
                 .caption(
@@ -328,8 +324,8 @@ fn plot(dir: &Path, s: &Scenario, results: &[ExploreResult]) -> Result<std::path
                 let strategy = runs[0].job.strategy.as_str();
                 let k = strategies.iter().position(|x| *x == strategy).unwrap_or(0);
                 let colour = COLOURS[k % COLOURS.len()];
-                let laser = runs[0].job.sensor != runs_first_sensor(results);
-                let style = if laser {
+                let dashed = runs[0].job.sensor != runs_first_sensor(results);
+                let style = if dashed {
                     colour.mix(0.9).stroke_width(1)
                 } else {
                     colour.stroke_width(3)
@@ -343,7 +339,7 @@ fn plot(dir: &Path, s: &Scenario, results: &[ExploreResult]) -> Result<std::path
                             v.map(|v| (c.distance, 100.0 * v))
                         })
                         .collect();
-                    let anno = if laser {
+                    let anno = if dashed {
                         chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))
                     } else {
                         chart.draw_series(LineSeries::new(pts, style))

@@ -5,8 +5,9 @@
 //! * **Bug1** goes once round the whole obstacle, remembering the boundary point closest to
 //!   the goal and how far along the boundary it lay; back at the hit point it goes to that
 //!   point the shorter way round (turning about and following with the obstacle on the other
-//!   side when going back is shorter, so it covers at most 1.5 perimeters) and leaves there.
-//!   If the way
+//!   side when going back is shorter, so it covers at most 1.5 perimeters) and leaves there
+//!   (or wherever it is within half the loop tolerance as close to the goal, or once it has
+//!   followed the boundary as far as that point lay). If the way
 //!   toward the goal is blocked at that leave point, or the robot hits the obstacle again
 //!   within the loop tolerance of it, the line from the leave point re-enters the same
 //!   obstacle: `no_path`.
@@ -124,6 +125,9 @@ struct Boundary {
     travelled: f64,
     /// Bug1: turn still to make on the spot to go back the other way, rad.
     about_turn: f64,
+    /// Bug1: the boundary distance at which the robot is back at the closest point, once
+    /// the loop is closed.
+    leave_at: f64,
     /// Bug1: the loop is closed; heading for `closest`.
     circled: bool,
     /// Bug1: been away from `closest` since circling (it may be the hit point itself).
@@ -262,6 +266,7 @@ impl BugController {
                         closest: (p, goal_dist, 0.0),
                         travelled: 0.0,
                         about_turn: 0.0,
+                        leave_at: f64::INFINITY,
                         circled: false,
                         away_from_closest: false,
                         on_mline: true,
@@ -298,9 +303,12 @@ impl BugController {
                             bd.circled = true;
                             // Going on reaches the closest point after `closest.2`, going
                             // back after the rest of the loop: turn about when that is shorter.
-                            if bd.closest.2 > bd.travelled / 2.0 {
+                            let ahead = bd.closest.2;
+                            let behind = bd.travelled - bd.closest.2;
+                            if behind < ahead {
                                 bd.about_turn = std::f64::consts::PI;
                             }
+                            bd.leave_at = bd.travelled + ahead.min(behind);
                         }
                         if bd.about_turn > 0.0 {
                             let s = self.follower.side().sign();
@@ -321,9 +329,15 @@ impl BugController {
                             if from_closest > 2.0 * tol {
                                 bd.away_from_closest = true;
                             }
-                            // The closest point may be the hit point itself.
-                            let at_closest = from_closest <= tol
-                                && (bd.away_from_closest || bd.closest.0 == bd.hit);
+                            // The closest point may be the hit point itself. It is also the
+                            // farthest excursion of a wobbly path toward the goal, which the
+                            // next pass may miss: as close to the goal within half the loop
+                            // tolerance counts as there, and so does having followed the
+                            // boundary as far as the closest point lay (Bug1's odometer).
+                            let at_closest = (from_closest <= tol
+                                && (bd.away_from_closest || bd.closest.0 == bd.hit))
+                                || goal_dist <= bd.closest.1 + tol / 2.0
+                                || bd.travelled >= bd.leave_at;
                             if at_closest {
                                 if goal_blocked {
                                     return self.end(
@@ -340,9 +354,10 @@ impl BugController {
                     }
                     BugAlgorithm::Bug2 => {
                         let near = side.abs() <= self.mission.mline_tolerance;
-                        let crossed = within
-                            && ((near && !bd.on_mline)
-                                || (!near && side.signum() != prev_side.signum()));
+                        // Entering the tolerance band, or jumping across the line between
+                        // two calls; leaving the band on the far side is the same crossing.
+                        let crossed =
+                            within && !bd.on_mline && (near || side.signum() != prev_side.signum());
                         bd.on_mline = near;
                         if crossed {
                             self.report.mline_crossings += 1;
