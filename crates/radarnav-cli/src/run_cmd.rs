@@ -18,9 +18,6 @@ use radarnav::sim::{
     Controller, NoObserver, Observer, RunSettings, RunSummary, ScanEvent, Simulation, Step,
 };
 
-/// How often an exploration run samples its maps' coverage, s.
-pub const COVERAGE_PERIOD: f64 = 1.0;
-
 /// What `run` and `bench --sim` share: which robot, which controller.
 pub struct Plan<'a> {
     pub robot: &'a Robot,
@@ -225,7 +222,7 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
             plan.robot.vehicle,
             &plan.robot.start,
             &mut maps,
-            COVERAGE_PERIOD,
+            radarnav::compare::COVERAGE_PERIOD,
         );
     }
     let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;

@@ -210,7 +210,7 @@ fn drive(s: &Scenario, seconds: f64, seed: u64) -> (Vec<radarnav::Pose>, RunSumm
 }
 
 #[test]
-fn wall_following_keeps_the_side_distance_in_the_band_along_a_straight_wall() {
+fn wall_following_keeps_the_side_distance_in_the_band_along_a_straight_wall_and_turns_at_its_end() {
     // The hall's south wall (inner face y = 0) on the robot's right; the far walls are 12 m
     // away. Bumpers: 8 sectors, rule `all`, safety 1.27 m, band 0.5 m.
     // Starts: converging from outside the band, and diverging from its inner edge.
@@ -228,8 +228,14 @@ fn wall_following_keeps_the_side_distance_in_the_band_along_a_straight_wall() {
             preset,
             "explore = \"wall_follow\"\nfollow = \"right\"",
         );
-        let (poses, summary) = drive(&s, 70.0, 1);
+        let (poses, summary) = drive(&s, 130.0, 1);
         assert_eq!(summary.bumps, 0, "{preset}");
+        // At the end wall (a concave corner) it turns left and follows that wall north.
+        assert!(
+            poses.iter().any(|p| p.x > 37.0 && p.y > 4.0),
+            "{preset}: did not round the concave corner; ended at {:?}",
+            poses.last()
+        );
         // After the first 10 s (settling from the start pose), until 4 m before the end wall.
         let side: Vec<f64> = poses
             .iter()
