@@ -10,6 +10,17 @@ fn radarnav(args: &[&str]) -> Output {
         .expect("run radarnav")
 }
 
+/// Runs radarnav and asserts it succeeded, showing its stderr if not.
+fn radarnav_ok(args: &[&str]) -> Output {
+    let out = radarnav(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn tmp(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);
@@ -24,7 +35,7 @@ fn read(dir: &Path, file: &str) -> Vec<u8> {
 fn scan_writes_files_and_same_seed_gives_same_bytes() {
     let (a, b, c) = (tmp("scan-a"), tmp("scan-b"), tmp("scan-c"));
     for (dir, seed) in [(&a, "5"), (&b, "5"), (&c, "6")] {
-        let out = radarnav(&[
+        radarnav_ok(&[
             "scan",
             "foliage-wall",
             "--sensor",
@@ -36,11 +47,6 @@ fn scan_writes_files_and_same_seed_gives_same_bytes() {
             "--out",
             dir.to_str().unwrap(),
         ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
     }
     for f in ["scan.json", "scan.csv", "scan.png"] {
         assert_eq!(read(&a, f), read(&b, f), "{f} differs for the same seed");
@@ -61,12 +67,7 @@ fn scan_writes_files_and_same_seed_gives_same_bytes() {
 #[test]
 fn demo_writes_the_four_figures_and_the_table() {
     let dir = tmp("demo");
-    let out = radarnav(&["demo", "--out", dir.to_str().unwrap(), "--repeats", "3"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = radarnav_ok(&["demo", "--out", dir.to_str().unwrap(), "--repeats", "3"]);
     for f in [
         "fig7_laser",
         "fig8_radar",
@@ -138,7 +139,7 @@ fn demo_writes_the_four_figures_and_the_table() {
 #[test]
 fn run_a_bug_mission_reports_its_navigation() {
     let dir = tmp("bug");
-    let out = radarnav(&[
+    let out = radarnav_ok(&[
         "run",
         "bug1-enclosed",
         "--out",
@@ -146,11 +147,6 @@ fn run_a_bug_mission_reports_its_navigation() {
         "--no-mcap",
         "--no-maps",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert!(stdout.contains("navigation: bug1:"), "{stdout}");
     let v: serde_json::Value = serde_json::from_slice(&read(&dir, "summary.json")).unwrap();
@@ -179,7 +175,7 @@ fn run_an_exploration_records_coverage_against_distance() {
         format!("{}[mission]\nexplore = \"wall_follow\"\n", &src[..cut]),
     )
     .unwrap();
-    let out = radarnav(&[
+    radarnav_ok(&[
         "run",
         file.to_str().unwrap(),
         "--out",
@@ -188,11 +184,6 @@ fn run_an_exploration_records_coverage_against_distance() {
         "--duration",
         "30",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let csv = String::from_utf8(read(&dir, "coverage.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(
@@ -222,7 +213,7 @@ fn run_an_exploration_records_coverage_against_distance() {
 #[test]
 fn compare_writes_the_csvs_the_plot_and_a_table_and_rejects_bad_input() {
     let dir = tmp("compare");
-    let out = radarnav(&[
+    let out = radarnav_ok(&[
         "compare",
         "foliage-wall",
         "--strategies",
@@ -236,11 +227,6 @@ fn compare_writes_the_csvs_the_plot_and_a_table_and_rejects_bad_input() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let table = String::from_utf8(out.stdout).unwrap();
     for key in [
         "bounce / radar",
@@ -267,7 +253,7 @@ fn compare_writes_the_csvs_the_plot_and_a_table_and_rejects_bad_input() {
     assert!(read(&dir, "compare.png").starts_with(b"\x89PNG"));
     // Same seeds, same numbers.
     let again = tmp("compare-again");
-    let out2 = radarnav(&[
+    radarnav_ok(&[
         "compare",
         "foliage-wall",
         "--strategies",
@@ -279,7 +265,6 @@ fn compare_writes_the_csvs_the_plot_and_a_table_and_rejects_bad_input() {
         "--out",
         again.to_str().unwrap(),
     ]);
-    assert!(out2.status.success());
     assert_eq!(read(&again, "compare.csv"), read(&dir, "compare.csv"));
     for (args, want) in [
         (
@@ -382,7 +367,7 @@ fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
 fn run_writes_every_file_and_is_deterministic() {
     let (a, b, c) = (tmp("run-a"), tmp("run-b"), tmp("run-c"));
     for (dir, seed) in [(&a, "3"), (&b, "3"), (&c, "4")] {
-        let out = radarnav(&[
+        let out = radarnav_ok(&[
             "run",
             "foliage-wall",
             "--duration",
@@ -392,11 +377,6 @@ fn run_writes_every_file_and_is_deterministic() {
             "--out",
             dir.to_str().unwrap(),
         ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
         let text = String::from_utf8_lossy(&out.stdout);
         assert!(text.contains("mission waypoints"), "{text}");
     }
@@ -436,7 +416,7 @@ fn run_with_a_teleop_csv_and_clear_errors() {
     std::fs::create_dir_all(&dir).unwrap();
     let csv = dir.join("drive.csv");
     std::fs::write(&csv, "duration,left,right\n1.0,0.3,0.3\n0.5,-0.2,0.2\n").unwrap();
-    let out = radarnav(&[
+    radarnav_ok(&[
         "run",
         "foliage-wall",
         "--teleop",
@@ -445,11 +425,6 @@ fn run_with_a_teleop_csv_and_clear_errors() {
         "--out",
         dir.join("out").to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let summary: serde_json::Value =
         serde_json::from_slice(&read(&dir.join("out"), "summary.json")).unwrap();
     assert_eq!(summary["outcome"], "completed");
@@ -457,7 +432,7 @@ fn run_with_a_teleop_csv_and_clear_errors() {
     assert!((summary["distance"].as_f64().unwrap() - 0.3).abs() < 1e-9);
     assert!(!dir.join("out/run.mcap").exists());
     // --maps picks the maps; --map-pose the pose.
-    let out = radarnav(&[
+    radarnav_ok(&[
         "run",
         "foliage-wall",
         "--teleop",
@@ -470,11 +445,6 @@ fn run_with_a_teleop_csv_and_clear_errors() {
         "--out",
         dir.join("fused").to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let summary: serde_json::Value =
         serde_json::from_slice(&read(&dir.join("fused"), "summary.json")).unwrap();
     assert_eq!(summary["maps"].as_array().unwrap().len(), 1);

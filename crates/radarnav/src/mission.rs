@@ -14,7 +14,7 @@ use thiserror::Error;
 
 use crate::nav::{
     BugController, BugMission, ExploreController, ExploreMission, TeleopController,
-    WaypointController,
+    WaypointController, WithRecoil,
 };
 use crate::sim::Controller;
 use crate::vehicle::DriveCommand;
@@ -110,10 +110,15 @@ impl Mission {
             MissionKind::Waypoints(w) => {
                 Box::new(WaypointController::new(w.clone(), self.controller_hz))
             }
-            MissionKind::Bug(b) => Box::new(BugController::new(b.clone(), self.controller_hz)),
-            MissionKind::Explore(e) => {
-                Box::new(ExploreController::new(e.clone(), self.controller_hz, seed))
-            }
+            MissionKind::Bug(b) => Box::new(WithRecoil::new(BugController::new(
+                b.clone(),
+                self.controller_hz,
+            ))),
+            MissionKind::Explore(e) => Box::new(WithRecoil::new(ExploreController::new(
+                e.clone(),
+                self.controller_hz,
+                seed,
+            ))),
         })
     }
 

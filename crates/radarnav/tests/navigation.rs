@@ -3,8 +3,9 @@
 //! foliage-gap demo map; exploration in foliage without touching it.
 
 use radarnav::Scenario;
-use radarnav::mission::MissionKind;
-use radarnav::nav::{BugAlgorithm, BugReport};
+use radarnav::map::PoseSource;
+use radarnav::mission::{DEFAULT_CONTROLLER_HZ, Mission, MissionKind};
+use radarnav::nav::{BugAlgorithm, BugReport, BumperConfig, ExploreMission, Side, Strategy};
 use radarnav::scenario::Robot;
 use radarnav::sim::{NoObserver, RunOutcome, RunSettings, RunSummary, Simulation};
 use rayon::prelude::*;
@@ -305,10 +306,19 @@ fn exploring_beside_foliage_with_the_radar_never_enters_it() {
     // foliage-wall with its radar only: returns inside the hedge are obstacles to the bumpers.
     let mut s = Scenario::builtin("foliage-wall").expect("built-in");
     s.robots[0].sensors.retain(|m| m.name == "radar");
-    for strategy in ["wall_follow", "bounce"] {
-        let src = format!("explore = \"{strategy}\"");
-        let m = hall(1.0, 1.0, "", (0.5, 0.5, 0.0), "radar_thesis", &src).mission;
-        s.mission = m;
+    for strategy in [Strategy::WallFollow, Strategy::Bounce] {
+        s.mission = Some(Mission {
+            robot: None,
+            controller_hz: DEFAULT_CONTROLLER_HZ,
+            kind: MissionKind::Explore(ExploreMission {
+                strategy,
+                speed: 0.4,
+                follow: Side::Left,
+                pose: PoseSource::Odometry,
+                bumpers: BumperConfig::default(),
+            }),
+        });
+        let strategy = strategy.as_str();
         for seed in 1..=2 {
             let (poses, summary) = drive(&s, 120.0, seed);
             assert_eq!(

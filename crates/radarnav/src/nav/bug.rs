@@ -25,10 +25,10 @@ use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
 use super::wall_follow::{Side, WallFollower};
-use super::{Recoil, nav_pose};
+use super::{Behaviour, nav_pose};
 use crate::map::PoseSource;
 use crate::pose::wrap_angle;
-use crate::sim::{ControlInput, Controller, Decision, Ending};
+use crate::sim::{ControlInput, Decision, Ending};
 use crate::vehicle::DriveCommand;
 
 /// Heading error beyond which the robot turns on the spot, rad (30°).
@@ -147,7 +147,6 @@ pub struct BugController {
     start: Option<DVec2>,
     last: Option<DVec2>,
     last_leave: Option<DVec2>,
-    recoil: Recoil,
     report: BugReport,
 }
 
@@ -169,7 +168,6 @@ impl BugController {
             start: None,
             last: None,
             last_leave: None,
-            recoil: Recoil::default(),
             report,
         }
     }
@@ -200,24 +198,15 @@ impl BugController {
     }
 }
 
-impl Controller for BugController {
+impl Behaviour for BugController {
     fn rate_hz(&self) -> f64 {
         self.rate_hz
-    }
-
-    fn update(&mut self, input: &ControlInput<'_>) -> Decision {
-        let mut recoil = std::mem::take(&mut self.recoil);
-        let d = recoil.drive(input, self.rate_hz, |bumped| self.decide(input, bumped));
-        self.recoil = recoil;
-        d
     }
 
     fn report(&self) -> Option<serde_json::Value> {
         serde_json::to_value(&self.report).ok()
     }
-}
 
-impl BugController {
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let pose = nav_pose(self.mission.pose, input);
         let p = pose.xy();

@@ -18,10 +18,10 @@ use rand_chacha::ChaCha8Rng;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState, Bumpers};
 use super::wall_follow::{Side, WallFollower};
-use super::{Recoil, nav_pose};
+use super::{Behaviour, nav_pose};
 use crate::map::{CellClass, MapConfig, Mapper, PoseSource};
 use crate::pose::wrap_angle;
-use crate::sim::{ControlInput, Controller, Decision, Ending};
+use crate::sim::{ControlInput, Decision, Ending};
 use crate::vehicle::DriveCommand;
 
 /// Turn rate on the spot, rad/s.
@@ -121,7 +121,6 @@ pub struct ExploreController {
     bumpers: BumperSensor,
     follower: WallFollower,
     phase: Phase,
-    recoil: Recoil,
     frontier: Option<Frontier>,
 }
 
@@ -141,74 +140,9 @@ impl ExploreController {
             follower: WallFollower::new(mission.follow, mission.speed, TURN_RATE),
             rng: ChaCha8Rng::seed_from_u64(seed),
             phase,
-            recoil: Recoil::default(),
             frontier: None,
             mission,
             rate_hz,
-        }
-    }
-
-    fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
-        let dt = 1.0 / self.rate_hz;
-        if self.mission.strategy == Strategy::Frontier {
-            self.map_scans(input);
-        }
-        let Some(b) = self.bumpers.update(input).cloned() else {
-            return Decision::Drive(DriveCommand::STOP);
-        };
-        let speed = self.mission.speed;
-        let radius = self.bumpers.follow_radius(input.vehicle);
-        let front_blocked = bumped || front_trips(&b);
-        match &mut self.phase {
-            Phase::Straight => {
-                if front_blocked {
-                    let angle = self.rng.random_range(0.5 * PI..1.5 * PI);
-                    let sign = if self.rng.random_bool(0.5) { 1.0 } else { -1.0 };
-                    self.phase = Phase::Turn { left: angle, sign };
-                    return Decision::Drive(DriveCommand::STOP);
-                }
-                // Something too close at a side: veer away from it while going on.
-                let q = b.sectors() as isize / 4;
-                let side = |k| b.state(k) == BumperState::TooClose;
-                let omega = match (side(q), side(-q)) {
-                    (true, false) => -0.5 * TURN_RATE,
-                    (false, true) => 0.5 * TURN_RATE,
-                    _ => 0.0,
-                };
-                Decision::Drive(DriveCommand::twist(speed, omega))
-            }
-            Phase::Turn { left, sign } => {
-                if *left <= 0.0 && !front_blocked {
-                    self.phase = Phase::Straight;
-                    return Decision::Drive(DriveCommand::twist(speed, 0.0));
-                }
-                *left -= TURN_RATE * dt;
-                Decision::Drive(DriveCommand::twist(0.0, *sign * TURN_RATE))
-            }
-            Phase::Spiral { turned } => {
-                if front_blocked {
-                    self.follower = WallFollower::new(self.mission.follow, speed, TURN_RATE);
-                    self.follower.engage();
-                    self.phase = Phase::Wall {
-                        until: input.time + SPIRAL_WALL_TIME,
-                    };
-                    return Decision::Drive(self.follower.command(&b, dt, radius));
-                }
-                let r = SPIRAL_R0 + SPIRAL_SPACING * *turned / TAU;
-                let omega = self.mission.follow.sign() * speed / r;
-                *turned += omega.abs() * dt;
-                Decision::Drive(DriveCommand::twist(speed, omega))
-            }
-            Phase::Wall { until } => {
-                if bumped {
-                    self.follower.bumped();
-                }
-                if input.time >= *until && !front_blocked {
-                    self.phase = Phase::Spiral { turned: 0.0 };
-                }
-                Decision::Drive(self.follower.command(&b, dt, radius))
-            }
-            Phase::Path => self.frontier_step(input, &b, front_blocked),
         }
     }
 
@@ -229,16 +163,7 @@ impl ExploreController {
                 config,
             )
             .ok();
-            Frontier {
-                mapper,
-                stamps: vec![f64::NEG_INFINITY; input.sensors.len()],
-                path: Vec::new(),
-                next_plan: 0.0,
-                rejected: Vec::new(),
-                target: None,
-                failing_since: None,
-                done: false,
-            }
+            Frontier::new(mapper, input.sensors.len())
         });
         let Some(mapper) = f.mapper.as_mut() else {
             return;
@@ -338,16 +263,73 @@ fn front_trips(b: &Bumpers) -> bool {
     })
 }
 
-impl Controller for ExploreController {
+impl Behaviour for ExploreController {
     fn rate_hz(&self) -> f64 {
         self.rate_hz
     }
 
-    fn update(&mut self, input: &ControlInput<'_>) -> Decision {
-        let mut recoil = std::mem::take(&mut self.recoil);
-        let d = recoil.drive(input, self.rate_hz, |bumped| self.decide(input, bumped));
-        self.recoil = recoil;
-        d
+    fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
+        let dt = 1.0 / self.rate_hz;
+        if self.mission.strategy == Strategy::Frontier {
+            self.map_scans(input);
+        }
+        let Some(b) = self.bumpers.update(input).cloned() else {
+            return Decision::Drive(DriveCommand::STOP);
+        };
+        let speed = self.mission.speed;
+        let radius = self.bumpers.follow_radius(input.vehicle);
+        let front_blocked = bumped || front_trips(&b);
+        match &mut self.phase {
+            Phase::Straight => {
+                if front_blocked {
+                    let angle = self.rng.random_range(0.5 * PI..1.5 * PI);
+                    let sign = if self.rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                    self.phase = Phase::Turn { left: angle, sign };
+                    return Decision::Drive(DriveCommand::STOP);
+                }
+                // Something too close at a side: veer away from it while going on.
+                let q = b.sectors() as isize / 4;
+                let side = |k| b.state(k) == BumperState::TooClose;
+                let omega = match (side(q), side(-q)) {
+                    (true, false) => -0.5 * TURN_RATE,
+                    (false, true) => 0.5 * TURN_RATE,
+                    _ => 0.0,
+                };
+                Decision::Drive(DriveCommand::twist(speed, omega))
+            }
+            Phase::Turn { left, sign } => {
+                if *left <= 0.0 && !front_blocked {
+                    self.phase = Phase::Straight;
+                    return Decision::Drive(DriveCommand::twist(speed, 0.0));
+                }
+                *left -= TURN_RATE * dt;
+                Decision::Drive(DriveCommand::twist(0.0, *sign * TURN_RATE))
+            }
+            Phase::Spiral { turned } => {
+                if front_blocked {
+                    self.follower = WallFollower::new(self.mission.follow, speed, TURN_RATE);
+                    self.follower.engage();
+                    self.phase = Phase::Wall {
+                        until: input.time + SPIRAL_WALL_TIME,
+                    };
+                    return Decision::Drive(self.follower.command(&b, dt, radius));
+                }
+                let r = SPIRAL_R0 + SPIRAL_SPACING * *turned / TAU;
+                let omega = self.mission.follow.sign() * speed / r;
+                *turned += omega.abs() * dt;
+                Decision::Drive(DriveCommand::twist(speed, omega))
+            }
+            Phase::Wall { until } => {
+                if bumped {
+                    self.follower.bumped();
+                }
+                if input.time >= *until && !front_blocked {
+                    self.phase = Phase::Spiral { turned: 0.0 };
+                }
+                Decision::Drive(self.follower.command(&b, dt, radius))
+            }
+            Phase::Path => self.frontier_step(input, &b, front_blocked),
+        }
     }
 }
 
@@ -365,6 +347,20 @@ struct Frontier {
 }
 
 impl Frontier {
+    /// A planner on `mapper` (fed by `sensors` sensors), with no scan yet.
+    fn new(mapper: Option<Mapper>, sensors: usize) -> Self {
+        Self {
+            mapper,
+            stamps: vec![f64::NEG_INFINITY; sensors],
+            path: Vec::new(),
+            next_plan: 0.0,
+            rejected: Vec::new(),
+            target: None,
+            failing_since: None,
+            done: false,
+        }
+    }
+
     /// Plans a path from `from` to the nearest reachable frontier through clear cells at
     /// least `keep_off` from any blocking cell. `None`: no frontier is reachable.
     fn plan(&mut self, from: DVec2, keep_off: f64) -> Option<()> {
@@ -504,16 +500,7 @@ mod tests {
         for _ in 0..5 {
             mapper.insert_scan(&scan, &sensor);
         }
-        Frontier {
-            mapper: Some(mapper),
-            stamps: vec![0.0],
-            path: Vec::new(),
-            next_plan: 0.0,
-            rejected: Vec::new(),
-            target: None,
-            failing_since: None,
-            done: false,
-        }
+        Frontier::new(Some(mapper), 1)
     }
 
     #[test]

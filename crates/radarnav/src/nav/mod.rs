@@ -28,12 +28,26 @@ pub fn nav_pose(source: PoseSource, input: &ControlInput<'_>) -> Pose {
     }
 }
 
-/// The reflex of a real bumper: after a refused move, back away from what was hit for a
-/// moment (forward if the robot hit something while reversing) before the behaviour resumes,
-/// told that it bumped: the sensor missed something (foliage the radar crosses whole), so
-/// the way it was going is blocked.
-#[derive(Clone, Debug, Default)]
-pub struct Recoil {
+/// A navigation behaviour on bumpers; [`WithRecoil`] makes it a [`Controller`].
+pub trait Behaviour {
+    /// Calls per second.
+    fn rate_hz(&self) -> f64;
+    /// The command for the coming period; `bumped` is true on the first call after the
+    /// robot recoiled from a bump.
+    fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision;
+    /// What the behaviour did, for `summary.json`.
+    fn report(&self) -> Option<serde_json::Value> {
+        None
+    }
+}
+
+/// A behaviour with the reflex of a real bumper: after a refused move, back away from what
+/// was hit for a moment (forward if the robot hit something while reversing) before the
+/// behaviour resumes, told that it bumped: the sensor missed something (foliage the radar
+/// crosses whole), so the way it was going is blocked.
+#[derive(Clone, Debug)]
+pub struct WithRecoil<B> {
+    behaviour: B,
     remaining: u32,
     speed: f64,
     last_v: f64,
@@ -43,17 +57,32 @@ pub struct Recoil {
 /// How long a recoil lasts, s, and its speed, m/s.
 const RECOIL: (f64, f64) = (0.6, 0.2);
 
-impl Recoil {
-    /// Wraps the behaviour `decide`: runs it unless the robot is recoiling from a bump. Its
-    /// argument is true on the first call after a recoil.
-    pub fn drive(
-        &mut self,
-        input: &ControlInput<'_>,
-        rate_hz: f64,
-        decide: impl FnOnce(bool) -> Decision,
-    ) -> Decision {
+impl<B> WithRecoil<B> {
+    /// `behaviour` with the reflex.
+    pub fn new(behaviour: B) -> Self {
+        Self {
+            behaviour,
+            remaining: 0,
+            speed: 0.0,
+            last_v: 0.0,
+            recoiled: false,
+        }
+    }
+
+    /// The behaviour.
+    pub fn behaviour(&self) -> &B {
+        &self.behaviour
+    }
+}
+
+impl<B: Behaviour> Controller for WithRecoil<B> {
+    fn rate_hz(&self) -> f64 {
+        self.behaviour.rate_hz()
+    }
+
+    fn update(&mut self, input: &ControlInput<'_>) -> Decision {
         if input.bumped && self.remaining == 0 {
-            self.remaining = (RECOIL.0 * rate_hz).ceil() as u32;
+            self.remaining = (RECOIL.0 * self.behaviour.rate_hz()).ceil() as u32;
             self.speed = if self.last_v > 0.0 {
                 -RECOIL.1
             } else {
@@ -65,11 +94,17 @@ impl Recoil {
             self.remaining -= 1;
             return Decision::Drive(DriveCommand::twist(self.speed, 0.0));
         }
-        let d = decide(std::mem::take(&mut self.recoiled));
+        let d = self
+            .behaviour
+            .decide(input, std::mem::take(&mut self.recoiled));
         if let Decision::Drive(DriveCommand::Twist(t)) = d {
             self.last_v = t.v;
         }
         d
+    }
+
+    fn report(&self) -> Option<serde_json::Value> {
+        self.behaviour.report()
     }
 }
 
