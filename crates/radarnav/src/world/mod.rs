@@ -1,6 +1,7 @@
 //! The 3D world: objects (shape + material) and the ray query every sensor is built on.
 
 pub mod forest;
+mod grid;
 pub mod material;
 pub mod overlap;
 pub mod shape;
@@ -8,10 +9,11 @@ pub mod shape;
 pub use material::{Band, Material, MaterialId, MaterialTable, builtin_materials};
 pub use shape::{OrientedBox, Ray, Shape, ShapeError};
 
+use std::cmp::Ordering;
+
 use glam::DVec3;
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
-use parry3d_f64::query::Ray as ParryRay;
+
+use grid::{CellWalk, Grid};
 
 /// A solid in the world.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,30 +39,152 @@ pub struct Interval {
     pub material: MaterialId,
 }
 
-/// Reusable buffers for [`World::ray_intervals`], so that casting many rays allocates nothing.
+/// The order every interval list of a ray is in: by entry, then object index, then exit.
+fn entry_order(a: &Interval, b: &Interval) -> Ordering {
+    a.t_in
+        .total_cmp(&b.t_in)
+        .then(a.object.cmp(&b.object))
+        .then(a.t_out.total_cmp(&b.t_out))
+}
+
+/// Reusable buffers for the ray queries of [`World`], so that casting many rays allocates
+/// nothing once they have grown.
 #[derive(Clone, Debug, Default)]
 pub struct RayQuery {
     spans: Vec<(f64, f64)>,
+    /// Results of [`World::ray_intervals`]; in [`OrderedIntervals`], the intervals found and
+    /// not yet taken, sorted last-first so that the next one is popped off the end.
     intervals: Vec<Interval>,
+    /// Per object, the number of the last ray that tested it: an object listed in several
+    /// cells is tested once per ray ("mailboxing").
+    stamps: Vec<u32>,
+    stamp: u32,
 }
 
-/// Objects, their materials and a bounding-volume hierarchy over them.
+impl RayQuery {
+    /// Starts a new ray over a world of `objects` objects.
+    fn next_ray(&mut self, objects: usize) {
+        if self.stamps.len() < objects {
+            self.stamps.resize(objects, 0);
+        }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.stamps.fill(0);
+            self.stamp = 1;
+        }
+        self.intervals.clear();
+    }
+}
+
+/// The intervals of one ray in entry order ([`World::ray_intervals`]'s order), revealed only
+/// as far as the consumer needs them.
+pub trait IntervalSource {
+    /// The next interval, when it is known to be next: every interval not revealed yet comes
+    /// after it. `None` when every remaining interval begins after `need` (there may be more
+    /// beyond it), or none remains.
+    fn peek(&mut self, need: f64) -> Option<Interval>;
+    /// Drops the interval that [`IntervalSource::peek`] returned.
+    fn pop(&mut self);
+}
+
+/// A sorted list of intervals as an [`IntervalSource`]: all known up front.
+#[derive(Clone, Debug)]
+pub struct SortedIntervals<'a> {
+    list: &'a [Interval],
+    next: usize,
+}
+
+impl<'a> SortedIntervals<'a> {
+    /// The intervals of `list`, which is in entry order.
+    pub fn new(list: &'a [Interval]) -> Self {
+        Self { list, next: 0 }
+    }
+}
+
+impl IntervalSource for SortedIntervals<'_> {
+    fn peek(&mut self, _need: f64) -> Option<Interval> {
+        self.list.get(self.next).copied()
+    }
+    fn pop(&mut self) {
+        self.next += 1;
+    }
+}
+
+/// The front-to-back ray query ([`World::ordered_intervals`]): walks the grid cell by cell
+/// and only as far as asked, so that a sensor that stops at its first solid, or where its
+/// budget runs out, does no work behind that point.
+#[derive(Debug)]
+pub struct OrderedIntervals<'w, 'q> {
+    world: &'w World,
+    ray: Ray,
+    t_max: f64,
+    walk: CellWalk,
+    /// Every interval beginning before this ray parameter has been found.
+    frontier: f64,
+    q: &'q mut RayQuery,
+}
+
+impl OrderedIntervals<'_, '_> {
+    /// Tests the objects of the next cell; `false` when the walk is over.
+    fn advance(&mut self) -> bool {
+        let Some((cell, t_exit)) = self.walk.next_cell(&self.world.grid) else {
+            self.frontier = f64::INFINITY;
+            return false;
+        };
+        let world = self.world;
+        for &object in world.grid.cell(cell) {
+            let q = &mut *self.q;
+            if q.stamps[object as usize] == q.stamp {
+                continue;
+            }
+            q.stamps[object as usize] = q.stamp;
+            let (spans, pending) = (&mut q.spans, &mut q.intervals);
+            world.object_intervals(object, &self.ray, self.t_max, spans, |iv| {
+                // `pending` is sorted last-first: the next interval is at the end.
+                let at = pending.partition_point(|p| entry_order(p, &iv) == Ordering::Greater);
+                pending.insert(at, iv);
+            });
+        }
+        self.frontier = t_exit;
+        true
+    }
+}
+
+impl IntervalSource for OrderedIntervals<'_, '_> {
+    fn peek(&mut self, need: f64) -> Option<Interval> {
+        loop {
+            if let Some(iv) = self.q.intervals.last()
+                && iv.t_in < self.frontier
+            {
+                return Some(*iv);
+            }
+            if self.frontier > need || !self.advance() {
+                // All found intervals begin at or after the frontier (after `need`); with the
+                // walk over, the frontier is infinite and none remains.
+                return self
+                    .q
+                    .intervals
+                    .last()
+                    .copied()
+                    .filter(|_| self.frontier.is_infinite());
+            }
+        }
+    }
+
+    fn pop(&mut self) {
+        self.q.intervals.pop();
+    }
+}
+
+/// Objects, their materials and the grid over them.
 #[derive(Clone)]
 pub struct World {
     materials: MaterialTable,
     objects: Vec<Object>,
-    bvh: Bvh,
-    /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
-    solid: Vec<u8>,
+    /// Per object, axis-aligned bounds `(min, max)`.
+    aabbs: Vec<(DVec3, DVec3)>,
+    grid: Grid,
     ground: MaterialId,
-}
-
-fn band_bit(band: Band) -> u8 {
-    match band {
-        Band::Radar => 1,
-        Band::Laser => 2,
-        Band::Surface => 4,
-    }
 }
 
 impl std::fmt::Debug for World {
@@ -75,31 +199,24 @@ impl std::fmt::Debug for World {
 impl World {
     /// A world of `objects` whose material ids refer to `materials`.
     pub fn new(materials: MaterialTable, objects: Vec<Object>) -> Self {
-        let aabbs: Vec<Aabb> = objects
+        let aabbs: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.shape.aabb()).collect();
+        let parts: Vec<_> = objects
             .iter()
-            .map(|o| {
-                let (lo, hi) = o.shape.aabb();
-                Aabb::new(lo, hi)
-            })
-            .collect();
-        let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
-        let solid = objects
-            .iter()
-            .map(|o| {
-                let m = materials.get(o.material);
-                [Band::Radar, Band::Laser, Band::Surface]
+            .enumerate()
+            .flat_map(|(i, o)| {
+                o.shape
+                    .part_aabbs()
                     .into_iter()
-                    .filter(|b| m.attenuation_db_per_m(*b).is_infinite())
-                    .map(band_bit)
-                    .sum()
+                    .map(move |(lo, hi)| (i as u32, lo.truncate(), hi.truncate()))
             })
             .collect();
+        let grid = Grid::new(&parts);
         let ground = materials.id("ground").expect("built-ins are never removed");
         Self {
             materials,
             objects,
-            bvh,
-            solid,
+            aabbs,
+            grid,
             ground,
         }
     }
@@ -122,65 +239,40 @@ impl World {
     /// Axis-aligned bounds of all objects, or `None` for an empty world.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         (!self.objects.is_empty()).then(|| {
-            self.objects.iter().map(|o| o.shape.aabb()).fold(
+            self.aabbs.iter().fold(
                 (DVec3::INFINITY, DVec3::NEG_INFINITY),
-                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+                |(lo, hi), (a, b)| (lo.min(*a), hi.max(*b)),
             )
         })
     }
 
-    /// Every interval where `ray` is inside an object and that overlaps `(0, t_max)`, sorted by
-    /// entry distance. Only objects whose bounding boxes the ray meets within `t_max` are tested.
+    /// Every interval where `ray` is inside an object and that overlaps `(0, t_max)`, in entry
+    /// order (by `t_in`, then object index, then `t_out`).
     pub fn ray_intervals<'q>(&self, ray: &Ray, t_max: f64, q: &'q mut RayQuery) -> &'q [Interval] {
-        self.gather(ray, t_max, 0, q)
-    }
-
-    /// Like [`World::ray_intervals`], but without the intervals that begin beyond the nearest
-    /// entry into a material solid to `band`: no ray of that band gets past it, so the
-    /// traversal skips every subtree behind it. The walk of a sensor ray over these intervals
-    /// ends exactly where it would over all of them.
-    pub fn ray_intervals_to_solid<'q>(
-        &self,
-        ray: &Ray,
-        t_max: f64,
-        band: Band,
-        q: &'q mut RayQuery,
-    ) -> &'q [Interval] {
-        self.gather(ray, t_max, band_bit(band), q)
-    }
-
-    /// The BVH query behind both public ones; `stop_bits` selects which solids bound the search
-    /// (0: none).
-    fn gather<'q>(
-        &self,
-        ray: &Ray,
-        t_max: f64,
-        stop_bits: u8,
-        q: &'q mut RayQuery,
-    ) -> &'q [Interval] {
-        q.intervals.clear();
-        let pray = ParryRay::new(ray.origin, ray.dir);
-        let bound = std::cell::Cell::new(t_max);
-        for leaf in self
-            .bvh
-            .leaves(|node| node.cast_ray(&pray, bound.get()) <= bound.get())
-        {
-            let start = q.intervals.len();
-            self.push_object(leaf, ray, bound.get(), &mut q.spans, &mut q.intervals);
-            if self.solid[leaf as usize] & stop_bits != 0 {
-                for iv in &q.intervals[start..] {
-                    bound.set(bound.get().min(iv.t_in.max(0.0)));
-                }
-            }
-        }
-        // Intervals gathered before the bound tightened are dropped too, so the result does
-        // not depend on the traversal order.
-        let bound = bound.get();
-        if bound < t_max {
-            q.intervals.retain(|iv| iv.t_in.max(0.0) <= bound);
-        }
-        sort_intervals(&mut q.intervals);
+        let mut ordered = self.ordered_intervals(ray, t_max, q);
+        while ordered.advance() {}
+        let q = ordered.q;
+        q.intervals.reverse();
         &q.intervals
+    }
+
+    /// The same intervals as [`World::ray_intervals`], revealed front to back as far as the
+    /// consumer asks ([`IntervalSource`]): the query behind every sensor ray.
+    pub fn ordered_intervals<'w, 'q>(
+        &'w self,
+        ray: &Ray,
+        t_max: f64,
+        q: &'q mut RayQuery,
+    ) -> OrderedIntervals<'w, 'q> {
+        q.next_ray(self.objects.len());
+        OrderedIntervals {
+            world: self,
+            ray: *ray,
+            t_max,
+            walk: CellWalk::new(&self.grid, ray, t_max),
+            frontier: f64::NEG_INFINITY,
+            q,
+        }
     }
 
     /// Same result as [`World::ray_intervals`], testing every object: the reference the
@@ -193,75 +285,75 @@ impl World {
     ) -> &'q [Interval] {
         q.intervals.clear();
         for i in 0..self.objects.len() {
-            self.push_object(i as u32, ray, t_max, &mut q.spans, &mut q.intervals);
+            let (spans, out) = (&mut q.spans, &mut q.intervals);
+            self.object_intervals(i as u32, ray, t_max, spans, |iv| out.push(iv));
         }
-        sort_intervals(&mut q.intervals);
+        q.intervals.sort_by(entry_order);
         &q.intervals
     }
 
-    fn push_object(
+    /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`.
+    fn object_intervals(
         &self,
         index: u32,
         ray: &Ray,
         t_max: f64,
         spans: &mut Vec<(f64, f64)>,
-        out: &mut Vec<Interval>,
+        mut take: impl FnMut(Interval),
     ) {
         let obj = &self.objects[index as usize];
         spans.clear();
         obj.shape.ray_intervals(ray, spans);
-        out.extend(
-            spans
-                .iter()
-                .filter(|(t_in, t_out)| *t_out > 0.0 && *t_in < t_max)
-                .map(|&(t_in, t_out)| Interval {
+        for &(t_in, t_out) in spans.iter() {
+            if t_out > 0.0 && t_in < t_max {
+                take(Interval {
                     t_in,
                     t_out,
                     object: index,
                     material: obj.material,
-                }),
-        );
+                });
+            }
+        }
     }
 
     /// The first object (lowest index) that a robot cannot drive through and that overlaps
     /// `body`; traversable materials (smoke, dust, the ground) never block.
     pub fn blocking_object(&self, body: &OrientedBox) -> Option<usize> {
         let (lo, hi) = body.aabb();
-        self.bvh
-            .leaves(move |node| node.mins().cmple(hi).all() && lo.cmple(node.maxs()).all())
+        let pad = self.grid.pad();
+        self.grid
+            .in_rect(lo.truncate(), hi.truncate())
             .map(|i| i as usize)
             .filter(|&i| {
+                let (a, b) = self.aabbs[i];
                 let o = &self.objects[i];
-                !self.materials.get(o.material).traversable && o.shape.overlaps_box(body)
+                a.cmple(hi + pad).all()
+                    && (lo - pad).cmple(b).all()
+                    && !self.materials.get(o.material).traversable
+                    && o.shape.overlaps_box(body)
             })
             .min()
     }
 
-    /// Indices of the objects containing point `p`.
+    /// Indices of the objects containing point `p`, in increasing order.
     pub fn objects_at(&self, p: DVec3) -> impl Iterator<Item = usize> + '_ {
-        self.bvh
-            .leaves(move |node| node.mins().cmple(p).all() && p.cmple(node.maxs()).all())
-            .map(|i| i as usize)
+        self.grid
+            .at_point(p)
+            .iter()
+            .map(|&i| i as usize)
             .filter(move |&i| self.objects[i].shape.contains(p))
     }
 }
 
-fn sort_intervals(out: &mut [Interval]) {
-    out.sort_by(|a, b| {
-        a.t_in
-            .total_cmp(&b.t_in)
-            .then(a.object.cmp(&b.object))
-            .then(a.t_out.total_cmp(&b.t_out))
-    });
-}
-
+/// Random worlds and rays for the property tests of the ray queries.
 #[cfg(test)]
-mod tests {
+pub(crate) mod strategies {
     use super::*;
     use glam::DVec2;
     use proptest::prelude::*;
 
-    fn arb_shape() -> impl Strategy<Value = Shape> {
+    /// Any of the five shapes, in an area of 16 × 16 m.
+    pub(crate) fn arb_shape() -> impl Strategy<Value = Shape> {
         let c = (-8.0..8.0f64, -8.0..8.0f64, 0.0..3.0f64);
         let p2 = (-8.0..8.0f64, -8.0..8.0f64);
         prop_oneof![
@@ -320,7 +412,9 @@ mod tests {
         ]
     }
 
-    fn arb_ray() -> impl Strategy<Value = Ray> {
+    /// A ray from anywhere in 20 × 20 m (often inside a shape), any direction within ±17° of
+    /// level.
+    pub(crate) fn arb_ray() -> impl Strategy<Value = Ray> {
         (
             (-10.0..10.0f64, -10.0..10.0f64, 0.0..3.0f64),
             (-1.0..1.0f64, -1.0..1.0f64, -0.3..0.3f64),
@@ -330,6 +424,73 @@ mod tests {
                 (d.length() > 1e-3).then(|| Ray::new(DVec3::new(x, y, z), d))
             })
     }
+
+    /// Rays that stress the grid walk: from points on the grid of whole metres, along the
+    /// axes or the diagonals, or anywhere ([`arb_ray`]).
+    pub(crate) fn arb_hard_ray() -> impl Strategy<Value = Ray> {
+        prop_oneof![
+            arb_ray(),
+            ((-10i32..10, -10i32..10, 0i32..3), 0usize..8).prop_map(|((x, y, z), k)| {
+                let a = k as f64 * std::f64::consts::FRAC_PI_4;
+                let (s, c) = a.sin_cos();
+                // Exact axis directions: no 1e-17 components from sin/cos.
+                let (c, s) = if k % 2 == 0 {
+                    (c.round(), s.round())
+                } else {
+                    (c, s)
+                };
+                Ray::new(
+                    DVec3::new(f64::from(x), f64::from(y), f64::from(z) * 0.5),
+                    DVec3::new(c, s, 0.0),
+                )
+            }),
+        ]
+    }
+
+    /// Small spheres and boxes, many to a cell of the grid.
+    fn arb_small_shape() -> impl Strategy<Value = Shape> {
+        let c = (-8.0..8.0f64, -8.0..8.0f64, 0.0..1.0f64);
+        prop_oneof![
+            (c.clone(), 0.05..0.4f64).prop_map(|((x, y, z), r)| Shape::sphere(
+                DVec3::new(x, y, z),
+                r
+            )
+            .unwrap()),
+            (c, 0.05..0.6f64, -3.2..3.2f64).prop_map(|((x, y, z), a, yaw)| {
+                Shape::cuboid(DVec3::new(x, y, z), DVec3::new(a, a * 0.7, 1.0), yaw).unwrap()
+            }),
+        ]
+    }
+
+    /// A world of 1-40 shapes of any size, or 50-400 small ones, each of any built-in
+    /// material.
+    pub(crate) fn arb_world() -> impl Strategy<Value = World> {
+        let materials = MaterialTable::default().names().len();
+        let objects = prop_oneof![
+            prop::collection::vec((arb_shape(), 0..materials), 1..40),
+            prop::collection::vec((arb_small_shape(), 0..materials), 50..400),
+        ];
+        objects.prop_map(|objects| {
+            let table = MaterialTable::default();
+            let objects = objects
+                .into_iter()
+                .map(|(shape, m)| Object {
+                    name: None,
+                    shape,
+                    material: MaterialId(m as u16),
+                })
+                .collect();
+            World::new(table, objects)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::strategies::{arb_hard_ray, arb_ray, arb_shape};
+    use super::*;
+    use parry3d_f64::query::Ray as ParryRay;
+    use proptest::prelude::*;
 
     fn world_of(shapes: Vec<Shape>) -> World {
         let objects = shapes
@@ -345,8 +506,8 @@ mod tests {
 
     proptest! {
         #[test]
-        fn bvh_query_equals_exhaustive(shapes in prop::collection::vec(arb_shape(), 1..40),
-                                        rays in prop::collection::vec(arb_ray(), 1..20),
+        fn grid_query_equals_exhaustive(shapes in prop::collection::vec(arb_shape(), 1..40),
+                                        rays in prop::collection::vec(arb_hard_ray(), 1..20),
                                         t_max in 1.0..30.0f64) {
             let world = world_of(shapes);
             let (mut a, mut b) = (RayQuery::default(), RayQuery::default());
@@ -412,6 +573,27 @@ mod tests {
                 (None, Some(b)) => {
                     prop_assert!(!shape.contains(ray.at(b + 1e-4)), "parry {} ours none", b);
                 }
+            }
+        }
+    }
+
+    proptest! {
+        /// The grid's box and point queries find what testing every object finds.
+        #[test]
+        fn box_and_point_queries_equal_exhaustive(
+            w in strategies::arb_world(),
+            boxes in prop::collection::vec(((-10.0..10.0f64, -10.0..10.0f64), (0.01..3.0f64, 0.01..3.0f64), -3.2..3.2f64), 1..30),
+        ) {
+            for ((x, y), (a, b), yaw) in boxes {
+                let body = OrientedBox::new(DVec3::new(x, y, 0.3), DVec3::new(a, b, 0.6), yaw);
+                let brute = (0..w.objects().len()).find(|&i| {
+                    let o = &w.objects()[i];
+                    !w.materials().get(o.material).traversable && o.shape.overlaps_box(&body)
+                });
+                prop_assert_eq!(w.blocking_object(&body), brute);
+                let p = DVec3::new(x, y, 0.3);
+                let inside: Vec<usize> = (0..w.objects().len()).filter(|&i| w.objects()[i].shape.contains(p)).collect();
+                prop_assert_eq!(w.objects_at(p).collect::<Vec<_>>(), inside);
             }
         }
     }

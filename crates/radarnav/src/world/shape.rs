@@ -491,6 +491,15 @@ impl Shape {
         }
     }
 
+    /// Axis-aligned bounds of each part: one per wall segment, the whole shape otherwise. The
+    /// acceleration grid lists a wall only in the cells its segments meet.
+    pub fn part_aabbs(&self) -> Vec<(DVec3, DVec3)> {
+        match self {
+            Self::Wall { segments, .. } => segments.iter().map(OrientedBox::aabb).collect(),
+            _ => vec![self.aabb()],
+        }
+    }
+
     /// The outline in the xy plane, for drawing top-down: a closed polygon per part.
     pub fn footprint(&self) -> Vec<Vec<DVec2>> {
         let square = |b: &OrientedBox| {
