@@ -1,5 +1,6 @@
 //! `radarnav`: the command line over the radarnav library.
 
+mod bench_cmd;
 mod compare_cmd;
 mod run_cmd;
 
@@ -157,8 +158,9 @@ enum Command {
         #[arg(long, default_value = "out")]
         out: PathBuf,
     },
-    /// Time scans of every sensor of a scenario's first robot; prints rays per second.
-    /// With --sim, time a whole simulated run instead.
+    /// Time scans of every sensor of a scenario's first robot; prints rays per second and per
+    /// CPU-second. With --sim, time a whole simulated run instead; with --export and --rays,
+    /// the scene and rays of the peers benchmark (bench/peers.py).
     Bench {
         /// A built-in name or a path to a .toml file.
         #[arg(default_value = "foliage-wall")]
@@ -166,14 +168,40 @@ enum Command {
         /// Scans per sensor.
         #[arg(long, default_value_t = 200)]
         scans: usize,
-        /// Replace the scenario's objects by a generated forest of this many foliage spheres
-        /// (over a square of 3 m × sqrt(N) a side, about one per 9 m²), the robot at its centre.
+        /// Replace the scenario's objects by a generated forest of this many foliage spheres,
+        /// the robot at its centre.
         #[arg(long)]
         forest: Option<usize>,
+        /// Side of the forest's square, metres (default 3 m x sqrt(N): one sphere per 9 m2).
+        #[arg(long)]
+        side: Option<f64>,
+        /// Radii of the forest's spheres, `MIN,MAX` metres.
+        #[arg(long, default_value = "0.3,1.5")]
+        radius: String,
         /// Simulate this many seconds of the scenario's mission (waypoints repeat) without
         /// recording, and print simulated time per wall time.
         #[arg(long)]
         sim: Option<f64>,
+        /// Write the world (the forest with --forest) and level rays from random free poses
+        /// to this directory: world.json, rays.csv, meta.json.
+        #[arg(long)]
+        export: Option<PathBuf>,
+        /// Poses of the exported rays; each casts 360 level rays, 0.4 m above the ground.
+        #[arg(long, default_value_t = 200)]
+        poses: usize,
+        /// Ray length of the exported scene, metres.
+        #[arg(long, default_value_t = 80.0)]
+        range: f64,
+        /// Trace the rays of an exported scene (laser: first hit; radar: 3 dB budget), write
+        /// their ranges beside it and print rays per CPU-second, medians of --repeats runs.
+        #[arg(long, conflicts_with_all = ["export", "sim"])]
+        rays: Option<PathBuf>,
+        /// Runs of --rays.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Print the result of --rays as one line of JSON.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -317,12 +345,31 @@ fn run(cli: Cli) -> Result<()> {
             scenario,
             scans,
             forest,
+            side,
+            radius,
             sim,
-        } => match (sim, forest) {
-            (Some(_), Some(_)) => bail!("--sim and --forest do not go together"),
-            (Some(seconds), None) => run_cmd::bench_sim(&load(&scenario)?, seconds),
-            (None, _) => bench(&scenario, scans, forest),
-        },
+            export,
+            poses,
+            range,
+            rays,
+            repeats,
+            json,
+        } => {
+            let forest = forest
+                .map(|n| bench_cmd::forest_spec(n, side, &radius))
+                .transpose()?;
+            if let Some(dir) = rays {
+                return bench_cmd::trace_rays(&dir, repeats, json);
+            }
+            if let Some(dir) = export {
+                return bench_cmd::export(&load(&scenario)?, forest.as_ref(), &dir, poses, range);
+            }
+            match (sim, forest) {
+                (Some(_), Some(_)) => bail!("--sim and --forest do not go together"),
+                (Some(seconds), None) => run_cmd::bench_sim(&load(&scenario)?, seconds),
+                (None, forest) => bench_cmd::scans(load(&scenario)?, scans, forest.as_ref()),
+            }
+        }
     }
 }
 
@@ -660,44 +707,4 @@ fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
     }
     w.flush()
         .with_context(|| format!("writing {}", path.display()))
-}
-
-fn bench(scenario: &str, scans: usize, forest: Option<usize>) -> Result<()> {
-    let mut s = load(scenario)?;
-    let mut start = s
-        .robot(None)
-        .with_context(|| format!("scenario `{}` has no robot", s.name))?
-        .start;
-    if let Some(n) = forest {
-        s.world = radarnav::world::forest::forest(n, 3.0 * (n as f64).sqrt(), s.sim.seed);
-        s.name = format!("forest of {n} spheres, sensors of {}", s.name);
-        start = Pose::default();
-    }
-    let r = s.robot(None).context("scenario has no robot")?;
-    let mut tracer = Tracer::default();
-    let mut rng = ChaCha8Rng::seed_from_u64(s.sim.seed);
-    say!(
-        "{} ({} objects), {} scans per sensor, one thread:",
-        s.name,
-        s.world.objects().len(),
-        scans
-    );
-    for m in &r.sensors {
-        let pose = start.compose(&m.mount);
-        let t0 = Instant::now();
-        let mut rays = 0usize;
-        for k in 0..scans.max(1) {
-            rays += m
-                .config
-                .scan(&s.world, &pose, k as f64, &mut rng, &mut tracer)
-                .len();
-        }
-        let secs = t0.elapsed().as_secs_f64();
-        say!(
-            "  {:<10} {:>8.0} rays/s  ({rays} rays in {secs:.3} s)",
-            m.name,
-            rays as f64 / secs
-        );
-    }
-    Ok(())
 }

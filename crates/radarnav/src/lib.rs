@@ -8,7 +8,8 @@
 //! (occupancy grids that tell seen-through from passable), [`compare`] (exploration
 //! experiments),
 //! [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs: CSV, scan logs,
-//! MCAP), [`render`] (figures), [`demo`] (the thesis experiment).
+//! MCAP), [`render`] (figures), [`demo`] (the thesis experiment), [`peers`] (the scene and rays
+//! of the benchmark against Embree and Bullet).
 
 #![warn(missing_docs)]
 
@@ -17,6 +18,7 @@ pub mod demo;
 pub mod map;
 pub mod mission;
 pub mod nav;
+pub mod peers;
 pub mod pose;
 pub mod record;
 pub mod render;

@@ -389,18 +389,24 @@ impl Grid {
         } else {
             Layers::Sensed
         };
-        let ((ox, oy), w) = (self.origin, self.width as i64);
+        let (lo, hi, miss) = (self.l_min, self.l_max, self.l_miss);
+        let (mark, sensed, passable) = (&mut self.mark, &mut self.sensed, &mut self.passable);
         for b in beams {
             let walk = CellWalk::new(b.from, b.to, self.resolution);
             let n = walk.len() - usize::from(b.hit);
-            for (i, j) in walk.take(n) {
-                // Inside the grid: `ensure` covered both ends, so the whole segment.
-                let k = ((j - oy) * w + (i - ox)) as usize;
-                if self.mark[k] != stamp {
-                    self.mark[k] = stamp;
-                    self.apply(k, self.l_miss, layers);
+            // Inside the grid: `ensure` covered both ends, so the whole segment. Branch-free
+            // per cell (a cell near the sensor is crossed by many rays of a dense scan, so
+            // whether it is fresh is hard to predict).
+            walk.for_each_index(n, self.origin, self.width, |k| {
+                let fresh = mark[k] != stamp;
+                mark[k] = stamp;
+                let s = sensed[k];
+                sensed[k] = if fresh { (s + miss).clamp(lo, hi) } else { s };
+                if layers.passable() {
+                    let p = passable[k];
+                    passable[k] = if fresh { (p + miss).clamp(lo, hi) } else { p };
                 }
-            }
+            });
         }
     }
 

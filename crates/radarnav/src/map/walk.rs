@@ -59,6 +59,44 @@ impl CellWalk {
     }
 }
 
+impl CellWalk {
+    /// Calls `f` with the storage index of each of the first `n` cells of the walk, in a grid
+    /// of `width` columns whose first cell is `origin` and which holds the whole walk. The
+    /// same cells in the same order as the iterator, without its bookkeeping per cell: the
+    /// mapper's inner loop.
+    pub fn for_each_index(
+        self,
+        n: usize,
+        origin: CellIndex,
+        width: usize,
+        mut f: impl FnMut(usize),
+    ) {
+        let Some((mut nx, mut ny)) = self.left else {
+            return;
+        };
+        let w = width as i64;
+        let mut k = (self.cell.1 - origin.1) * w + (self.cell.0 - origin.0);
+        let (kx, ky) = (self.step.0, self.step.1 * w);
+        let mut t = self.t_max;
+        for _ in 0..n {
+            f(k as usize);
+            if nx == 0 && ny == 0 {
+                return;
+            }
+            // The iterator's rule, step for step.
+            if ny == 0 || (nx > 0 && t.x < t.y) {
+                k += kx;
+                t.x += self.t_delta.x;
+                nx -= 1;
+            } else {
+                k += ky;
+                t.y += self.t_delta.y;
+                ny -= 1;
+            }
+        }
+    }
+}
+
 impl Iterator for CellWalk {
     type Item = CellIndex;
 

@@ -24,6 +24,31 @@ use crate::world::{MaterialId, Ray, World};
 /// (about 0.2 ms of work) ran a 10-minute simulation slower on two threads than on one.
 pub const PARALLEL_MIN_RAYS: usize = 4096;
 
+/// Rays per task when a scan is shared among threads.
+const PARALLEL_CHUNK: usize = 256;
+
+thread_local! {
+    /// The tracer of each thread that takes part in parallel work: its buffers (sized to the
+    /// world) are kept from task to task.
+    static POOL_TRACER: std::cell::Cell<Tracer> = std::cell::Cell::new(Tracer::default());
+}
+
+/// Runs `f` with this thread's pool tracer. The tracer is taken out while `f` runs, so a task
+/// that rayon starts on this thread meanwhile (while `f` waits on nested work) gets a fresh
+/// one instead of a second borrow.
+pub(crate) fn with_pool_tracer<T>(f: impl FnOnce(&mut Tracer) -> T) -> T {
+    let mut tracer = POOL_TRACER.take();
+    let out = f(&mut tracer);
+    POOL_TRACER.set(tracer);
+    out
+}
+
+/// A scan's fan ([`World::fan`]) has about this many rays per azimuth sector.
+const RAYS_PER_SECTOR: f64 = 4.0;
+/// A scan builds a fan only while the parts in range are at most its rays divided by this:
+/// filing a part costs about as much as walking a ray through the grid.
+const PARTS_PER_RAY_FOR_FAN: usize = 4;
+
 /// Which of the thesis' three parallel rays a reading came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -115,7 +140,7 @@ impl Scan {
         beam_ray(
             &self.pose,
             az,
-            el,
+            el.sin_cos(),
             self.beams[i].side() * self.side_beam_offset,
         )
     }
@@ -127,12 +152,12 @@ impl Scan {
     }
 }
 
-/// The ray at azimuth `az` and elevation `el` from a sensor at `pose`, its origin shifted
-/// `lateral` metres to the ray's left, perpendicular to it in the scan plane.
-fn beam_ray(pose: &Pose, az: f64, el: f64, lateral: f64) -> Ray {
+/// The ray at azimuth `az` and elevation `el` (given as its sine and cosine, the same for a
+/// whole plane) from a sensor at `pose`, its origin shifted `lateral` metres to the ray's
+/// left, perpendicular to it in the scan plane.
+fn beam_ray(pose: &Pose, az: f64, (se, ce): (f64, f64), lateral: f64) -> Ray {
     let heading = pose.yaw + az;
     let (s, c) = heading.sin_cos();
-    let (se, ce) = el.sin_cos();
     let dir = DVec3::new(ce * c, ce * s, se);
     let left = DVec3::new(-s, c, 0.0);
     Ray {
@@ -140,6 +165,12 @@ fn beam_ray(pose: &Pose, az: f64, el: f64, lateral: f64) -> Ray {
         dir,
     }
 }
+
+/// The random draws of one scan, in ray order: which side beam each ray reports and its
+/// standard-normal range noise ([`SensorConfig::draw`]). Drawn before any ray is traced, so
+/// that a scan does not depend on how its rays, or a run's scans, are shared among threads.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScanDraws(Vec<(Beam, f64)>);
 
 impl SensorConfig {
     /// One scan from a sensor at `pose` (world frame) at time `stamp`. Random draws (side-beam
@@ -153,24 +184,57 @@ impl SensorConfig {
         rng: &mut R,
         tracer: &mut Tracer,
     ) -> Scan {
-        self.scan_split(world, pose, stamp, rng, tracer, PARALLEL_MIN_RAYS)
+        let draws = self.draw(rng);
+        self.trace_scan(world, pose, stamp, &draws, tracer, PARALLEL_MIN_RAYS)
     }
 
-    /// [`SensorConfig::scan`], parallel from `parallel_min` rays up.
-    fn scan_split<R: Rng + ?Sized>(
+    /// The random draws of one scan, taken from `rng` exactly as [`SensorConfig::scan`]
+    /// takes them.
+    pub fn draw<R: Rng + ?Sized>(&self, rng: &mut R) -> ScanDraws {
+        let n = self.azimuth_count() * self.elevations.len();
+        let noisy = self.range_noise_std > 0.0 || self.range_noise_rel > 0.0;
+        let side_beams = self.has_side_beams();
+        ScanDraws(
+            (0..n)
+                .map(|_| {
+                    let beam = if side_beams {
+                        [Beam::Center, Beam::Left, Beam::Right][rng.random_range(0..3)]
+                    } else {
+                        Beam::Center
+                    };
+                    let noise: f64 = if noisy {
+                        rng.sample(StandardNormal)
+                    } else {
+                        0.0
+                    };
+                    (beam, noise)
+                })
+                .collect(),
+        )
+    }
+
+    /// Whether this sensor reports one of three parallel rays (the thesis' side beams).
+    fn has_side_beams(&self) -> bool {
+        self.side_beam_offset > 0.0 && self.kind != SensorKind::GroundTruth
+    }
+
+    /// The scan of [`SensorConfig::scan`] from draws taken beforehand; its rays are shared
+    /// among threads from `parallel_min` rays up.
+    pub(crate) fn trace_scan(
         &self,
         world: &World,
         pose: &Pose,
         stamp: f64,
-        rng: &mut R,
+        draws: &ScanDraws,
         tracer: &mut Tracer,
         parallel_min: usize,
     ) -> Scan {
         let azimuths = self.azimuth_count();
         let n = azimuths * self.elevations.len();
         let band = self.kind.band();
-        let noisy = self.range_noise_std > 0.0 || self.range_noise_rel > 0.0;
-        let side_beams = self.side_beam_offset > 0.0 && self.kind != SensorKind::GroundTruth;
+        let side_beams = self.has_side_beams();
+        let draws = &draws.0;
+        assert_eq!(draws.len(), n, "draws of another sensor");
         let mut out = Scan {
             stamp,
             kind: self.kind,
@@ -191,38 +255,48 @@ impl SensorConfig {
             materials: Vec::with_capacity(n),
             beams: Vec::with_capacity(n),
         };
-        // All random draws first, in ray order, so that a scan does not depend on how its rays
-        // are shared among threads.
-        let draws: Vec<(Beam, f64)> = (0..n)
-            .map(|_| {
-                let beam = if side_beams {
-                    [Beam::Center, Beam::Left, Beam::Right][rng.random_range(0..3)]
-                } else {
-                    Beam::Center
-                };
-                let noise: f64 = if noisy {
-                    rng.sample(StandardNormal)
-                } else {
-                    0.0
-                };
-                (beam, noise)
-            })
-            .collect();
+        let plane_sin_cos: Vec<(f64, f64)> = self.elevations.iter().map(|e| e.sin_cos()).collect();
+        // Rays that all leave the sensor's origin share one set of candidate lists, unless
+        // the world has so much in range that building them costs more than walking the grid.
+        let mut fan = std::mem::take(&mut tracer.fan);
+        let sectors = (std::f64::consts::TAU / self.resolution / RAYS_PER_SECTOR).round();
+        let fan_ok = !side_beams
+            && world.fan(
+                pose.position(),
+                self.range_max,
+                sectors.clamp(8.0, 4096.0) as usize,
+                n / PARTS_PER_RAY_FOR_FAN,
+                &mut fan,
+            );
+        let fan_ref = fan_ok.then_some(&fan);
         let trace = |tracer: &mut Tracer, i: usize| {
-            let (az, el) = out.angles(i);
+            let (az, _) = out.angles(i);
+            let el = plane_sin_cos[i / azimuths];
             let ray = beam_ray(pose, az, el, draws[i].0.side() * out.side_beam_offset);
-            tracer.trace(world, &ray, band, self.penetration_db, self.range_max)
+            match fan_ref {
+                Some(fan) => tracer.trace_in_fan(
+                    world,
+                    fan,
+                    pose.yaw + az,
+                    &ray,
+                    band,
+                    self.penetration_db,
+                    self.range_max,
+                ),
+                None => tracer.trace(world, &ray, band, self.penetration_db, self.range_max),
+            }
         };
         let returns: Vec<Return> = if n >= parallel_min {
             (0..n)
                 .into_par_iter()
-                .with_min_len(256)
-                .map_init(Tracer::default, trace)
+                .with_min_len(PARALLEL_CHUNK)
+                .map(|i| with_pool_tracer(|t| trace(t, i)))
                 .collect()
         } else {
             (0..n).map(|i| trace(tracer, i)).collect()
         };
-        for (ret, (beam, noise)) in returns.iter().zip(&draws) {
+        tracer.fan = fan;
+        for (ret, (beam, noise)) in returns.iter().zip(draws) {
             out.ranges
                 .push(self.reported_range(ret.range, *noise) as f32);
             out.hits.push(ret.kind);
@@ -378,22 +452,19 @@ mod tests {
     #[test]
     fn parallel_scan_equals_serial_scan() {
         let world = crate::world::forest::forest(300, 50.0, 4);
-        let cfg = preset("radar_thesis_n100").unwrap();
         let pose = Pose::new(0.0, 0.0, 0.4, 0.0);
         let mut tr = Tracer::default();
-        let mut scan = |min| {
-            cfg.scan_split(
-                &world,
-                &pose,
-                0.0,
-                &mut ChaCha8Rng::seed_from_u64(9),
-                &mut tr,
-                min,
-            )
-        };
-        let (serial, parallel) = (scan(usize::MAX), scan(1));
-        assert!(serial.hits.contains(&HitKind::Exhausted));
-        assert_eq!(serial, parallel);
+        // Side beams (grid walk per ray), one origin (fan), first hit.
+        for name in ["radar_thesis_n100", "radar_thesis", "hokuyo_utm30lx"] {
+            let cfg = preset(name).unwrap();
+            let draws = cfg.draw(&mut ChaCha8Rng::seed_from_u64(9));
+            let mut scan = |min| cfg.trace_scan(&world, &pose, 0.0, &draws, &mut tr, min);
+            let (serial, parallel) = (scan(usize::MAX), scan(1));
+            assert!(
+                serial.hits.contains(&HitKind::Solid) || serial.hits.contains(&HitKind::Exhausted)
+            );
+            assert_eq!(serial, parallel, "{name}");
+        }
     }
 
     #[test]

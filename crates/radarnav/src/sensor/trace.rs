@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::world::{Band, IntervalSource, MaterialId, Ray, RayQuery, World};
+use crate::world::{Band, Fan, IntervalSource, MaterialId, Ray, RayQuery, World};
 
 /// How a ray ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -48,6 +48,8 @@ pub struct Return {
 #[derive(Clone, Debug, Default)]
 pub struct Tracer {
     query: RayQuery,
+    /// The candidate lists of the scan being traced ([`crate::sensor`] builds them).
+    pub(crate) fan: Fan,
     /// Volumes the ray is currently inside: (exit distance, dB/m, material).
     active: Vec<(f64, f64, MaterialId)>,
 }
@@ -63,6 +65,35 @@ impl Tracer {
         budget_db: f64,
         t_max: f64,
     ) -> Return {
+        self.trace_from(world, None, ray, band, budget_db, t_max)
+    }
+
+    /// [`Tracer::trace`] for a ray from the origin of `fan` ([`World::fan`], built for at
+    /// least `t_max`) whose direction has bearing `heading`: the same result, found from the
+    /// fan's candidate lists instead of a walk through the grid.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_in_fan(
+        &mut self,
+        world: &World,
+        fan: &Fan,
+        heading: f64,
+        ray: &Ray,
+        band: Band,
+        budget_db: f64,
+        t_max: f64,
+    ) -> Return {
+        self.trace_from(world, Some((fan, heading)), ray, band, budget_db, t_max)
+    }
+
+    fn trace_from(
+        &mut self,
+        world: &World,
+        fan: Option<(&Fan, f64)>,
+        ray: &Ray,
+        band: Band,
+        budget_db: f64,
+        t_max: f64,
+    ) -> Return {
         // The ground plane z = 0 is solid to every sensor; a ray tilted down ends on it.
         let t_ground = if ray.dir.z < 0.0 {
             (-ray.origin.z / ray.dir.z).max(0.0)
@@ -70,7 +101,12 @@ impl Tracer {
             f64::INFINITY
         };
         let reach = t_max.min(t_ground);
-        let mut intervals = world.ordered_intervals(ray, reach, &mut self.query);
+        let mut intervals = match fan {
+            Some((fan, heading)) => {
+                world.fan_intervals(fan, ray, heading, reach, Some(band), &mut self.query)
+            }
+            None => world.ordered_intervals(ray, reach, Some(band), &mut self.query),
+        };
         let ret = walk(
             &mut intervals,
             world,
@@ -330,6 +366,36 @@ mod tests {
                     let whole =
                         walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, &mut active);
                     proptest::prop_assert_eq!(ordered, whole, "{:?} {:?}", ray, band);
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// Rays of one origin traced through a fan's candidate lists end exactly where the
+        /// walk over the exhaustive interval list ends them: any world, origins inside objects,
+        /// any number of sectors, rays level or rising, headings of any turn.
+        #[test]
+        fn fan_trace_equals_walk_over_exhaustive_intervals(
+            w in crate::world::strategies::arb_world(),
+            origin in crate::world::strategies::arb_ray(),
+            sectors in prop_oneof![Just(1usize), 1usize..20, 20usize..5000],
+            rays in proptest::collection::vec((-20.0..20.0f64, 0.0..0.4f64), 1..24),
+            budget in prop_oneof![Just(0.0), 0.0..12.0f64, Just(f64::INFINITY)],
+            t_max in 0.5..40.0f64,
+        ) {
+            let (mut tr, mut q, mut active) = (Tracer::default(), RayQuery::default(), Vec::new());
+            let mut fan = crate::world::Fan::default();
+            proptest::prop_assert!(w.fan(origin.origin, t_max, sectors, usize::MAX, &mut fan));
+            for (heading, el) in rays {
+                let (s, c) = heading.sin_cos();
+                let ray = Ray { origin: origin.origin, dir: DVec3::new(el.cos() * c, el.cos() * s, el.sin()) };
+                for band in [Band::Radar, Band::Laser, Band::Surface] {
+                    let fanned = tr.trace_in_fan(&w, &fan, heading, &ray, band, budget, t_max);
+                    let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
+                    let whole =
+                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, &mut active);
+                    proptest::prop_assert_eq!(fanned, whole, "{:?} heading {} {:?}", ray, heading, band);
                 }
             }
         }

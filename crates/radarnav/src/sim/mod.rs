@@ -10,6 +10,9 @@
 //! 5. the robot and its odometry move.
 //!
 //! Scan `k` of a sensor with rate `r` is taken at exactly `k / r` seconds, whatever `dt` is.
+//! Between two controller calls the command is fixed, so every scan until the next call has a
+//! known pose: at each call the loop traces that batch on all cores and hands the scans out
+//! in order as the steps reach them (same draws, same scans as one by one).
 //! Every random draw comes from ChaCha8 streams of the run's seed: stream 0 for the odometry,
 //! stream `1 + i` for sensor `i`, so the same scenario and seed give the same run.
 
@@ -25,7 +28,11 @@ use thiserror::Error;
 
 use crate::pose::Pose;
 use crate::scenario::{MountedSensor, Robot, Scenario};
-use crate::sensor::{Scan, Tracer};
+use std::collections::VecDeque;
+
+use rayon::prelude::*;
+
+use crate::sensor::{PARALLEL_MIN_RAYS, Scan, Tracer, with_pool_tracer};
 use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
 use crate::world::World;
 
@@ -229,6 +236,8 @@ pub struct Simulation<'a> {
     sensor_rngs: Vec<ChaCha8Rng>,
     tracer: Tracer,
     next_scan: Vec<u64>,
+    /// Per sensor, its next scans traced ahead (see the module doc).
+    prepared: Vec<VecDeque<Scan>>,
     next_control: u64,
     latest: Vec<Option<Scan>>,
     latest_odometry: Vec<Option<Pose>>,
@@ -239,6 +248,11 @@ pub struct Simulation<'a> {
     bumps: Vec<BumpEvent>,
     bump_count: usize,
 }
+
+/// Most scans traced ahead at one controller call (their memory is bounded by this).
+const LOOKAHEAD_SCANS: usize = 64;
+/// Fewest rays in a batch worth sharing among threads.
+const LOOKAHEAD_MIN_RAYS: usize = 1024;
 
 /// Bumps kept with time and object in the summary; later ones are only counted.
 pub const MAX_BUMP_EVENTS: usize = 1000;
@@ -298,6 +312,7 @@ impl<'a> Simulation<'a> {
             sensor_rngs: (1..=n as u64).map(stream).collect(),
             tracer: Tracer::default(),
             next_scan: vec![0; n],
+            prepared: vec![VecDeque::new(); n],
             next_control: 0,
             latest: vec![None; n],
             latest_odometry: vec![None; n],
@@ -376,6 +391,7 @@ impl<'a> Simulation<'a> {
             while self.next_control as f64 / rate <= t + TIME_EPS {
                 self.next_control += 1;
             }
+            self.prepare_scans();
         }
         // 3. Collision check along the arc.
         let cmd = self.command;
@@ -442,14 +458,19 @@ impl<'a> Simulation<'a> {
             };
             let sensor = &self.robot.sensors[i];
             let (truth, odometry) = pose_at(when);
-            let sensor_pose = truth.compose(&sensor.mount);
-            let scan = sensor.config.scan(
-                self.world,
-                &sensor_pose,
-                when,
-                &mut self.sensor_rngs[i],
-                &mut self.tracer,
-            );
+            let scan = match self.prepared[i].pop_front() {
+                Some(scan) => {
+                    debug_assert!(scan.stamp == when && scan.pose == truth.compose(&sensor.mount));
+                    scan
+                }
+                None => sensor.config.scan(
+                    self.world,
+                    &truth.compose(&sensor.mount),
+                    when,
+                    &mut self.sensor_rngs[i],
+                    &mut self.tracer,
+                ),
+            };
             self.next_scan[i] += 1;
             observer.on_scan(&ScanEvent {
                 sensor: i,
@@ -459,6 +480,76 @@ impl<'a> Simulation<'a> {
             })?;
             self.latest[i] = Some(scan);
             self.latest_odometry[i] = Some(odometry);
+        }
+    }
+
+    /// Traces, on all cores, every scan due from now until the controller's next call: the
+    /// command is fixed until then, so the poses are known (the steps ahead are replayed
+    /// here, collisions included, exactly as [`Simulation::step`] will take them). Each
+    /// sensor's draws are taken in scan order, so the scans are the ones the steps would take.
+    fn prepare_scans(&mut self) {
+        let sensors = &self.robot.sensors;
+        let (dt, rate, cmd) = (self.settings.dt, self.controller.rate_hz(), self.command);
+        let mut next = self.next_scan.clone();
+        let mut jobs: Vec<(usize, f64, Pose)> = Vec::new();
+        let mut rays = 0;
+        let mut due = |until: f64, pose_at: &dyn Fn(f64) -> Pose, jobs: &mut Vec<_>| {
+            for (i, s) in sensors.iter().enumerate() {
+                while next[i] as f64 / s.config.rate_hz <= until && jobs.len() < LOOKAHEAD_SCANS {
+                    let when = next[i] as f64 / s.config.rate_hz;
+                    jobs.push((i, when, pose_at(when)));
+                    rays += s.config.azimuth_count() * s.config.elevations.len();
+                    next[i] += 1;
+                }
+            }
+        };
+        let (mut tick, mut start) = (self.tick, self.truth);
+        while jobs.len() < LOOKAHEAD_SCANS {
+            let t = tick as f64 * dt;
+            if tick > self.tick {
+                if tick >= self.ticks {
+                    break;
+                }
+                due(t + TIME_EPS, &|_| start, &mut jobs);
+                if self.next_control as f64 / rate <= t + TIME_EPS {
+                    break;
+                }
+            }
+            let executed = match self.first_block(&start, cmd, dt) {
+                Some(_) => Twist::default(),
+                None => cmd,
+            };
+            due(
+                t + dt - TIME_EPS,
+                &|s| integrate(&start, executed, (s - t).max(0.0)),
+                &mut jobs,
+            );
+            start = integrate(&start, executed, dt);
+            tick += 1;
+        }
+        // A batch too small to share is left to the steps.
+        if jobs.len() < 2 || rays < LOOKAHEAD_MIN_RAYS {
+            return;
+        }
+        let draws: Vec<_> = jobs
+            .iter()
+            .map(|&(i, _, _)| sensors[i].config.draw(&mut self.sensor_rngs[i]))
+            .collect();
+        let world = self.world;
+        let scans: Vec<Scan> = jobs
+            .par_iter()
+            .zip(&draws)
+            .map(|(&(i, when, truth), draws)| {
+                let s = &sensors[i];
+                let pose = truth.compose(&s.mount);
+                with_pool_tracer(|tracer| {
+                    s.config
+                        .trace_scan(world, &pose, when, draws, tracer, PARALLEL_MIN_RAYS)
+                })
+            })
+            .collect();
+        for (&(i, _, _), scan) in jobs.iter().zip(scans) {
+            self.prepared[i].push_back(scan);
         }
     }
 

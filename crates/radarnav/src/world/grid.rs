@@ -23,7 +23,7 @@ const MAX_CELLS_PER_OBJECT: f64 = 4.0;
 const MAX_CELLS: f64 = (1u32 << 22) as f64;
 
 /// A uniform grid of square cells over the xy bounds of a set of footprints; each cell lists
-/// the objects whose footprints (padded) overlap it.
+/// the ids (objects, or parts of them) whose footprints (padded) overlap it.
 #[derive(Clone, Debug)]
 pub(crate) struct Grid {
     lo: DVec2,
@@ -31,15 +31,15 @@ pub(crate) struct Grid {
     inv_cell: f64,
     nx: usize,
     ny: usize,
-    /// Objects of cell `c` are `items[starts[c]..starts[c + 1]]`, in increasing order.
+    /// Ids of cell `c` are `items[starts[c]..starts[c + 1]]`, in increasing order.
     starts: Vec<u32>,
     items: Vec<u32>,
     pad: f64,
 }
 
 impl Grid {
-    /// A grid over `parts`: (object index, xy min, xy max) of each part of each object's
-    /// footprint (a wall has one part per segment), in increasing object order.
+    /// A grid over `parts`: (id, xy min, xy max) of footprints, in increasing id order; an id
+    /// may have several rectangles.
     pub(crate) fn new(parts: &[(u32, DVec2, DVec2)]) -> Self {
         let (lo, hi) = parts.iter().fold(
             (DVec2::INFINITY, DVec2::NEG_INFINITY),
@@ -89,8 +89,8 @@ impl Grid {
             items: Vec::new(),
             pad,
         };
-        // Two passes (count, then fill) into one flat list; `last` keeps an object that has
-        // several parts in a cell from being listed twice there.
+        // Two passes (count, then fill) into one flat list; `last` keeps an id that has
+        // several rectangles in a cell from being listed twice there.
         let mut last = vec![u32::MAX; nx * ny];
         for fill in [false, true] {
             last.fill(u32::MAX);
@@ -148,13 +148,13 @@ impl Grid {
         )
     }
 
-    /// The objects listed in cell `c`.
+    /// The ids listed in cell `c`.
     pub(crate) fn cell(&self, c: usize) -> &[u32] {
         &self.items[self.starts[c] as usize..self.starts[c + 1] as usize]
     }
 
-    /// The objects whose padded footprints may meet the xy rectangle `[a, b]`; an object with
-    /// parts in several of its cells is listed once per cell.
+    /// The ids whose padded footprints may meet the xy rectangle `[a, b]`; an id in several of
+    /// its cells comes once per cell.
     pub(crate) fn in_rect(&self, a: DVec2, b: DVec2) -> impl Iterator<Item = u32> + '_ {
         let empty = !(a.is_finite() && b.is_finite() && a.cmple(b).all()) || self.outside(a, b);
         let (x0, x1, y0, y1) = if empty {
@@ -173,7 +173,7 @@ impl Grid {
         b.x < self.lo.x || b.y < self.lo.y || a.x > hi.x || a.y > hi.y
     }
 
-    /// The objects whose padded footprints may contain the point `p`.
+    /// The ids whose padded footprints may contain the point `p`, in increasing order.
     pub(crate) fn at_point(&self, p: DVec3) -> &[u32] {
         let p = p.truncate();
         if !p.is_finite() || self.outside(p, p) {
@@ -206,7 +206,10 @@ impl CellWalk {
         let d = ray.dir.truncate();
         let hi = grid.lo + DVec2::new(grid.nx as f64, grid.ny as f64) * grid.cell;
         let (mut t0, mut t1) = (0.0f64, t_max);
-        for a in 0..2 {
+        // A ray from inside the grid (the usual case: a sensor in the world) needs no clipping:
+        // the walk ends where it steps out of the grid.
+        let inside = o.cmpge(grid.lo).all() && o.cmple(hi).all();
+        for a in (0..2).filter(|_| !inside) {
             if d[a] == 0.0 {
                 if o[a] < grid.lo[a] || o[a] > hi[a] {
                     t1 = f64::NEG_INFINITY;

@@ -1,17 +1,21 @@
 //! The 3D world: objects (shape + material) and the ray query every sensor is built on.
 
+mod fan;
 pub mod forest;
 mod grid;
 pub mod material;
 pub mod overlap;
 pub mod shape;
 
+pub use fan::Fan;
 pub use material::{Band, Material, MaterialId, MaterialTable, builtin_materials};
 pub use shape::{OrientedBox, Ray, Shape, ShapeError};
 
+use shape::sphere_interval;
+
 use std::cmp::Ordering;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use grid::{CellWalk, Grid};
 
@@ -47,6 +51,12 @@ fn entry_order(a: &Interval, b: &Interval) -> Ordering {
         .then(a.t_out.total_cmp(&b.t_out))
 }
 
+/// Files `iv` in a pending list sorted last-first (the next interval at the end).
+fn insert_pending(pending: &mut Vec<Interval>, iv: Interval) {
+    let at = pending.partition_point(|p| entry_order(p, &iv) == Ordering::Greater);
+    pending.insert(at, iv);
+}
+
 /// Reusable buffers for the ray queries of [`World`], so that casting many rays allocates
 /// nothing once they have grown.
 #[derive(Clone, Debug, Default)]
@@ -55,17 +65,17 @@ pub struct RayQuery {
     /// Results of [`World::ray_intervals`]; in [`OrderedIntervals`], the intervals found and
     /// not yet taken, sorted last-first so that the next one is popped off the end.
     intervals: Vec<Interval>,
-    /// Per object, the number of the last ray that tested it: an object listed in several
-    /// cells is tested once per ray ("mailboxing").
+    /// Per object, then per part, the number of the last ray that tested it: an object
+    /// listed in several cells is tested once per ray ("mailboxing").
     stamps: Vec<u32>,
     stamp: u32,
 }
 
 impl RayQuery {
-    /// Starts a new ray over a world of `objects` objects.
-    fn next_ray(&mut self, objects: usize) {
-        if self.stamps.len() < objects {
-            self.stamps.resize(objects, 0);
+    /// Starts a new ray over a world of `slots` objects and parts.
+    fn next_ray(&mut self, slots: usize) {
+        if self.stamps.len() < slots {
+            self.stamps.resize(slots, 0);
         }
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
@@ -110,42 +120,64 @@ impl IntervalSource for SortedIntervals<'_> {
     }
 }
 
-/// The front-to-back ray query ([`World::ordered_intervals`]): walks the grid cell by cell
-/// and only as far as asked, so that a sensor that stops at its first solid, or where its
-/// budget runs out, does no work behind that point.
+/// Where a front-to-back query takes its next parts to test from.
+#[derive(Debug)]
+enum Candidates<'w> {
+    /// The grid's cells along the ray.
+    Grid(CellWalk),
+    /// A fan's sector list, nearest first.
+    Fan(&'w [(f64, u32)]),
+}
+
+/// The front-to-back ray query ([`World::ordered_intervals`], [`World::fan_intervals`]):
+/// tests parts in the order the ray can meet them and only as far as asked, so that a sensor
+/// that stops at its first solid, or where its budget runs out, does no work behind that
+/// point.
 #[derive(Debug)]
 pub struct OrderedIntervals<'w, 'q> {
     world: &'w World,
     ray: Ray,
     t_max: f64,
-    walk: CellWalk,
+    candidates: Candidates<'w>,
     /// Every interval beginning before this ray parameter has been found.
     frontier: f64,
+    /// Objects solid to this band bit are tested part by part.
+    by_parts: u8,
     q: &'q mut RayQuery,
 }
 
 impl OrderedIntervals<'_, '_> {
-    /// Tests the objects of the next cell; `false` when the walk is over.
+    /// Tests the next parts (a grid cell's, or a fan's next one) and moves the frontier;
+    /// `false` when none remain.
     fn advance(&mut self) -> bool {
-        let Some((cell, t_exit)) = self.walk.next_cell(&self.world.grid) else {
-            self.frontier = f64::INFINITY;
-            return false;
-        };
         let world = self.world;
-        for &object in world.grid.cell(cell) {
-            let q = &mut *self.q;
-            if q.stamps[object as usize] == q.stamp {
-                continue;
+        match &mut self.candidates {
+            Candidates::Grid(walk) => {
+                let Some((cell, t_exit)) = walk.next_cell(&world.grid) else {
+                    self.frontier = f64::INFINITY;
+                    return false;
+                };
+                for &part in world.grid.cell(cell) {
+                    world.test_part(part, &self.ray, self.t_max, self.by_parts, self.q);
+                }
+                self.frontier = t_exit;
             }
-            q.stamps[object as usize] = q.stamp;
-            let (spans, pending) = (&mut q.spans, &mut q.intervals);
-            world.object_intervals(object, &self.ray, self.t_max, spans, |iv| {
-                // `pending` is sorted last-first: the next interval is at the end.
-                let at = pending.partition_point(|p| entry_order(p, &iv) == Ordering::Greater);
-                pending.insert(at, iv);
-            });
+            Candidates::Fan(list) => {
+                let Some((&(_, part), rest)) = list.split_first() else {
+                    self.frontier = f64::INFINITY;
+                    return false;
+                };
+                *list = rest;
+                world.test_part(part, &self.ray, self.t_max, self.by_parts, self.q);
+                // Parts the ray may start in have the lower bound 0, and their intervals begin
+                // before it (t_in < 0): nothing is final until all of them are tested.
+                self.frontier = match rest.first() {
+                    None => f64::INFINITY,
+                    Some(&(lower, _)) if lower > 0.0 => lower,
+                    Some(_) => f64::NEG_INFINITY,
+                };
+            }
         }
-        self.frontier = t_exit;
         true
     }
 }
@@ -176,6 +208,28 @@ impl IntervalSource for OrderedIntervals<'_, '_> {
     }
 }
 
+/// What the grid lists: a segment of a wall, or a whole object; with what a ray query needs
+/// of it close at hand (the objects themselves are large and far apart in memory).
+#[derive(Clone, Copy, Debug)]
+struct Part {
+    object: u32,
+    /// The wall segment, or [`WHOLE`].
+    segment: u32,
+    /// A sphere's centre and radius: tested here, without the object.
+    sphere: Option<(DVec3, f64)>,
+    material: MaterialId,
+}
+
+const WHOLE: u32 = u32::MAX;
+
+fn band_bit(band: Band) -> u8 {
+    match band {
+        Band::Radar => 1,
+        Band::Laser => 2,
+        Band::Surface => 4,
+    }
+}
+
 /// Objects, their materials and the grid over them.
 #[derive(Clone)]
 pub struct World {
@@ -183,6 +237,11 @@ pub struct World {
     objects: Vec<Object>,
     /// Per object, axis-aligned bounds `(min, max)`.
     aabbs: Vec<(DVec3, DVec3)>,
+    /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
+    solid: Vec<u8>,
+    parts: Vec<Part>,
+    /// Per part, its xy bounds `(min, max)`.
+    part_rects: Vec<(DVec2, DVec2)>,
     grid: Grid,
     ground: MaterialId,
 }
@@ -200,22 +259,48 @@ impl World {
     /// A world of `objects` whose material ids refer to `materials`.
     pub fn new(materials: MaterialTable, objects: Vec<Object>) -> Self {
         let aabbs: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.shape.aabb()).collect();
-        let parts: Vec<_> = objects
+        let solid = objects
             .iter()
-            .enumerate()
-            .flat_map(|(i, o)| {
-                o.shape
-                    .part_aabbs()
+            .map(|o| {
+                let m = materials.get(o.material);
+                [Band::Radar, Band::Laser, Band::Surface]
                     .into_iter()
-                    .map(move |(lo, hi)| (i as u32, lo.truncate(), hi.truncate()))
+                    .filter(|b| m.attenuation_db_per_m(*b).is_infinite())
+                    .map(band_bit)
+                    .sum()
             })
             .collect();
-        let grid = Grid::new(&parts);
+        // A wall is listed segment by segment, so that a ray that stops at it tests only the
+        // segments in the cells it crosses.
+        let mut parts = Vec::new();
+        let mut rects = Vec::new();
+        for (i, o) in objects.iter().enumerate() {
+            let boxes = o.shape.part_aabbs();
+            let whole = boxes.len() == 1 && !matches!(o.shape, Shape::Wall { .. });
+            let sphere = match o.shape {
+                Shape::Sphere { center, radius } => Some((center, radius)),
+                _ => None,
+            };
+            for (k, (lo, hi)) in boxes.into_iter().enumerate() {
+                rects.push((parts.len() as u32, lo.truncate(), hi.truncate()));
+                parts.push(Part {
+                    object: i as u32,
+                    segment: if whole { WHOLE } else { k as u32 },
+                    sphere,
+                    material: o.material,
+                });
+            }
+        }
+        let grid = Grid::new(&rects);
+        let part_rects = rects.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
         let ground = materials.id("ground").expect("built-ins are never removed");
         Self {
             materials,
             objects,
             aabbs,
+            solid,
+            parts,
+            part_rects,
             grid,
             ground,
         }
@@ -249,7 +334,7 @@ impl World {
     /// Every interval where `ray` is inside an object and that overlaps `(0, t_max)`, in entry
     /// order (by `t_in`, then object index, then `t_out`).
     pub fn ray_intervals<'q>(&self, ray: &Ray, t_max: f64, q: &'q mut RayQuery) -> &'q [Interval] {
-        let mut ordered = self.ordered_intervals(ray, t_max, q);
+        let mut ordered = self.ordered_intervals(ray, t_max, None, q);
         while ordered.advance() {}
         let q = ordered.q;
         q.intervals.reverse();
@@ -258,19 +343,50 @@ impl World {
 
     /// The same intervals as [`World::ray_intervals`], revealed front to back as far as the
     /// consumer asks ([`IntervalSource`]): the query behind every sensor ray.
+    ///
+    /// With `stop_band`, an object solid to that band may come part by part (a wall segment
+    /// by segment, overlapping at its joints) rather than merged: a walk that ends at the
+    /// first solid entry ends at the same place and material, and tests fewer segments.
     pub fn ordered_intervals<'w, 'q>(
         &'w self,
         ray: &Ray,
         t_max: f64,
+        stop_band: Option<Band>,
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
-        q.next_ray(self.objects.len());
+        q.next_ray(self.objects.len() + self.parts.len());
         OrderedIntervals {
             world: self,
             ray: *ray,
             t_max,
-            walk: CellWalk::new(&self.grid, ray, t_max),
+            candidates: Candidates::Grid(CellWalk::new(&self.grid, ray, t_max)),
             frontier: f64::NEG_INFINITY,
+            by_parts: stop_band.map_or(0, band_bit),
+            q,
+        }
+    }
+
+    /// [`World::ordered_intervals`] for a ray from `fan`'s origin ([`World::fan`] built for
+    /// at least `t_max`) whose direction has bearing `heading`: the parts of its sector,
+    /// nearest first, instead of a walk through the grid.
+    pub fn fan_intervals<'w, 'q>(
+        &'w self,
+        fan: &'w Fan,
+        ray: &Ray,
+        heading: f64,
+        t_max: f64,
+        stop_band: Option<Band>,
+        q: &'q mut RayQuery,
+    ) -> OrderedIntervals<'w, 'q> {
+        debug_assert_eq!(ray.origin, fan.origin());
+        q.next_ray(self.objects.len() + self.parts.len());
+        OrderedIntervals {
+            world: self,
+            ray: *ray,
+            t_max,
+            candidates: Candidates::Fan(fan.candidates(heading)),
+            frontier: f64::NEG_INFINITY,
+            by_parts: stop_band.map_or(0, band_bit),
             q,
         }
     }
@@ -290,6 +406,79 @@ impl World {
         }
         q.intervals.sort_by(entry_order);
         &q.intervals
+    }
+
+    /// Tests grid part `part` against `ray` (once per ray: `q`'s stamps) and files its
+    /// intervals in `q`'s pending list: the part alone when its object is solid to a band of
+    /// `by_parts`, else the whole object.
+    fn test_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
+        let Part {
+            object,
+            segment,
+            sphere,
+            material,
+        } = self.parts[part as usize];
+        if let Some((center, radius)) = sphere {
+            // The commonest object of forests, in one piece: its slot is the object's.
+            if q.stamps[object as usize] != q.stamp {
+                q.stamps[object as usize] = q.stamp;
+                if let Some((t_in, t_out)) = sphere_interval(center, radius, ray)
+                    && t_out > 0.0
+                    && t_in < t_max
+                {
+                    insert_pending(
+                        &mut q.intervals,
+                        Interval {
+                            t_in,
+                            t_out,
+                            object,
+                            material,
+                        },
+                    );
+                }
+            }
+            return;
+        }
+        let by_part = segment != WHOLE && self.solid[object as usize] & by_parts != 0;
+        let slot = if by_part {
+            self.objects.len() + part as usize
+        } else {
+            object as usize
+        };
+        if q.stamps[slot] == q.stamp {
+            return;
+        }
+        q.stamps[slot] = q.stamp;
+        let pending = &mut q.intervals;
+        let mut insert = |iv: Interval| insert_pending(pending, iv);
+        if by_part {
+            let obj = &self.objects[object as usize];
+            let Shape::Wall { segments, .. } = &obj.shape else {
+                unreachable!("only walls are split into parts")
+            };
+            match segments[segment as usize].interval(ray) {
+                // The ray starts in this segment: the merged interval may begin further back
+                // (in a segment behind the origin), and among objects the ray starts in, the
+                // one entered first is reported. Only the whole wall gives that entry.
+                Some((t_in, t_out))
+                    if t_in <= 0.0 && t_out > 0.0 && q.stamps[object as usize] != q.stamp =>
+                {
+                    q.stamps[object as usize] = q.stamp;
+                    self.object_intervals(object, ray, t_max, &mut q.spans, insert);
+                }
+                // Its merged intervals are filed already.
+                Some((t_in, t_out)) if t_in <= 0.0 && t_out > 0.0 => {}
+                Some((t_in, t_out)) if t_out > 0.0 && t_in < t_max => insert(Interval {
+                    t_in,
+                    t_out,
+                    object,
+                    material: obj.material,
+                }),
+                _ => {}
+            }
+        } else {
+            self.object_intervals(object, ray, t_max, &mut q.spans, insert);
+        }
     }
 
     /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`.
@@ -323,7 +512,7 @@ impl World {
         let pad = self.grid.pad();
         self.grid
             .in_rect(lo.truncate(), hi.truncate())
-            .map(|i| i as usize)
+            .map(|p| self.parts[p as usize].object as usize)
             .filter(|&i| {
                 let (a, b) = self.aabbs[i];
                 let o = &self.objects[i];
@@ -337,10 +526,13 @@ impl World {
 
     /// Indices of the objects containing point `p`, in increasing order.
     pub fn objects_at(&self, p: DVec3) -> impl Iterator<Item = usize> + '_ {
+        let mut last = None;
         self.grid
             .at_point(p)
             .iter()
-            .map(|&i| i as usize)
+            .map(|&part| self.parts[part as usize].object as usize)
+            // A cell lists parts in increasing order, so an object's parts are adjacent.
+            .filter(move |&i| last.replace(i) != Some(i))
             .filter(move |&i| self.objects[i].shape.contains(p))
     }
 }

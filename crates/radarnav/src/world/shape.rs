@@ -102,7 +102,8 @@ impl OrientedBox {
         DVec3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z)
     }
 
-    fn interval(&self, ray: &Ray) -> Option<(f64, f64)> {
+    /// The stretch of the ray's line inside the box, `None` for a miss or a grazing touch.
+    pub(crate) fn interval(&self, ray: &Ray) -> Option<(f64, f64)> {
         let o = self.local_vec(ray.origin - self.center);
         let d = self.local_vec(ray.dir);
         slab_interval(o, d, -self.half, self.half)
@@ -111,6 +112,17 @@ impl OrientedBox {
     fn contains(&self, p: DVec3) -> bool {
         let l = self.local_vec(p - self.center);
         l.abs().cmple(self.half).all()
+    }
+
+    /// The corners of the footprint grown by `pad` on every side, counter-clockwise.
+    pub fn corners(&self, pad: f64) -> [DVec2; 4] {
+        let (c, s) = (self.cos_sin.x, self.cos_sin.y);
+        let (ax, ay) = (
+            DVec2::new(c, s) * (self.half.x + pad),
+            DVec2::new(-s, c) * (self.half.y + pad),
+        );
+        let m = self.center.truncate();
+        [m - ax - ay, m + ax - ay, m + ax + ay, m - ax + ay]
     }
 
     /// Axis-aligned bounds `(min, max)`.
@@ -143,6 +155,19 @@ fn slab_interval(o: DVec3, d: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64, f64)>
         }
     }
     (t0 < t1).then_some((t0, t1))
+}
+
+/// The stretch of the ray's line inside a sphere, `None` for a miss or a grazing touch: the
+/// one formula of every sphere query.
+#[inline]
+pub(crate) fn sphere_interval(center: DVec3, radius: f64, ray: &Ray) -> Option<(f64, f64)> {
+    let oc = ray.origin - center;
+    let b = oc.dot(ray.dir);
+    let disc = b * b - (oc.length_squared() - radius * radius);
+    (disc > 0.0).then(|| {
+        let s = disc.sqrt();
+        (-b - s, -b + s)
+    })
 }
 
 /// The stretch of the ray's line inside the horizontal slab `z_lo ≤ z ≤ z_hi`.
@@ -350,15 +375,7 @@ impl Shape {
     /// (any `t`, negative too) lies inside the shape. Grazing touches give no interval.
     pub fn ray_intervals(&self, ray: &Ray, out: &mut Vec<(f64, f64)>) {
         match self {
-            Self::Sphere { center, radius } => {
-                let oc = ray.origin - *center;
-                let b = oc.dot(ray.dir);
-                let disc = b * b - (oc.length_squared() - radius * radius);
-                if disc > 0.0 {
-                    let s = disc.sqrt();
-                    out.push((-b - s, -b + s));
-                }
-            }
+            Self::Sphere { center, radius } => out.extend(sphere_interval(*center, *radius, ray)),
             Self::Box(b) => out.extend(b.interval(ray)),
             Self::Cylinder {
                 center,
@@ -502,12 +519,7 @@ impl Shape {
 
     /// The outline in the xy plane, for drawing top-down: a closed polygon per part.
     pub fn footprint(&self) -> Vec<Vec<DVec2>> {
-        let square = |b: &OrientedBox| {
-            let (c, s) = (b.cos_sin.x, b.cos_sin.y);
-            let (ax, ay) = (DVec2::new(c, s) * b.half.x, DVec2::new(-s, c) * b.half.y);
-            let m = b.center.truncate();
-            vec![m - ax - ay, m + ax - ay, m + ax + ay, m - ax + ay]
-        };
+        let square = |b: &OrientedBox| b.corners(0.0).to_vec();
         let circle = |m: DVec2, r: f64| {
             (0..48)
                 .map(|i| {
