@@ -505,3 +505,45 @@ fn run_with_a_teleop_csv_and_clear_errors() {
         "{err}"
     );
 }
+
+#[test]
+fn bench_exports_a_scene_and_traces_its_rays_for_the_peers() {
+    let dir = tmp("peers-scene");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "bench", "--export", d, "--forest", "300", "--side", "40", "--radius", "0.3,1.0",
+        "--poses", "5", "--range", "30",
+    ];
+    radarnav_ok(&args);
+    let meta: serde_json::Value = serde_json::from_slice(&read(&dir, "meta.json")).unwrap();
+    assert_eq!(meta["rays"], 1800);
+    assert_eq!(meta["objects"], 300);
+    // The same command writes the same bytes.
+    let rays = read(&dir, "rays.csv");
+    radarnav_ok(&args);
+    assert_eq!(read(&dir, "rays.csv"), rays);
+    let out = radarnav_ok(&["bench", "--rays", d, "--repeats", "2", "--json"]);
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in ["laser_rays_per_cpu_s", "radar_rays_per_cpu_s"] {
+        assert!(result[key].as_f64().unwrap() > 0.0, "{result}");
+    }
+    // One f64 per ray; the laser stops no later than the radar, which sees through foliage.
+    let ranges = |name: &str| -> Vec<f64> {
+        read(&dir, name)
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+            .collect()
+    };
+    let (laser, radar) = (ranges("ranges_laser.f64"), ranges("ranges_radar.f64"));
+    assert_eq!((laser.len(), radar.len()), (1800, 1800));
+    assert!(laser.iter().zip(&radar).all(|(l, r)| l <= r));
+    assert!(laser.iter().zip(&radar).any(|(l, r)| l < r));
+    // Bad input names the problem.
+    let e = radarnav(&[
+        "bench", "--export", d, "--forest", "10", "--radius", "1,0.5",
+    ]);
+    assert_eq!(e.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--radius"));
+    let e = radarnav(&["bench", "--rays", "/nonexistent-radarnav-scene"]);
+    assert!(String::from_utf8_lossy(&e.stderr).contains("meta.json"));
+}
