@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use glam::DVec2;
-use radarnav::peers::{pose_rays, read_scene, write_scene};
+use radarnav::peers::{pose_rays, read_scene, write_ranges, write_scene};
 use radarnav::sensor::Tracer;
 use radarnav::world::Band;
 use radarnav::world::forest::{ForestSpec, forest_of};
@@ -201,9 +201,7 @@ pub fn trace_rays(dir: &Path, repeats: usize, json: bool) -> Result<()> {
         }
         rates.sort_by(f64::total_cmp);
         let median = rates[rates.len() / 2];
-        let bytes: Vec<u8> = ranges.iter().flat_map(|r| r.to_le_bytes()).collect();
-        let path = dir.join(format!("ranges_{name}.f64"));
-        std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))?;
+        write_ranges(dir, name, &ranges)?;
         result.insert(format!("{name}_rays_per_cpu_s"), median.into());
         lines.push(format!(
             "  {name:<6} {:>6.2} M rays per CPU-second (median of {}), {:.3} us per ray",

@@ -214,8 +214,9 @@ pub fn write_scene(
     write_json(&dir.join("world.json"), &objects)?;
     write_json(&dir.join("meta.json"), &meta)?;
     let path = dir.join("rays.csv");
-    let mut w = BufWriter::new(fs::File::create(&path).map_err(io(&path))?);
-    writeln!(w, "ox,oy,oz,dx,dy,dz").map_err(io(&path))?;
+    let part = partial(&path);
+    let mut w = BufWriter::new(fs::File::create(&part).map_err(io(&part))?);
+    writeln!(w, "ox,oy,oz,dx,dy,dz").map_err(io(&part))?;
     for r in rays {
         // `{:?}` prints the shortest text that reads back to the same f64.
         writeln!(
@@ -223,15 +224,37 @@ pub fn write_scene(
             "{:?},{:?},{:?},{:?},{:?},{:?}",
             r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z
         )
-        .map_err(io(&path))?;
+        .map_err(io(&part))?;
     }
-    w.flush().map_err(io(&path))?;
+    w.flush().map_err(io(&part))?;
+    drop(w);
+    fs::rename(&part, &path).map_err(io(&path))?;
     Ok(skipped)
+}
+
+/// Writes `ranges` (one little-endian f64 per ray, `inf` for no return) to
+/// `dir/ranges_<name>.f64`, for the peers script to compare; returns the path.
+pub fn write_ranges(dir: &Path, name: &str, ranges: &[f64]) -> Result<PathBuf, SceneError> {
+    let path = dir.join(format!("ranges_{name}.f64"));
+    let part = partial(&path);
+    let bytes: Vec<u8> = ranges.iter().flat_map(|r| r.to_le_bytes()).collect();
+    fs::write(&part, bytes).map_err(io(&part))?;
+    fs::rename(&part, &path).map_err(io(&path))?;
+    Ok(path)
+}
+
+/// The temporary name a file is written under until it is complete (DESIGN §12).
+fn partial(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_owned();
+    name.push(".partial");
+    path.with_file_name(name)
 }
 
 fn write_json(path: &Path, value: &impl Serialize) -> Result<(), SceneError> {
     let text = serde_json::to_string_pretty(value).expect("plain data serialises");
-    fs::write(path, text).map_err(io(path))
+    let part = partial(path);
+    fs::write(&part, text).map_err(io(&part))?;
+    fs::rename(&part, path).map_err(io(path))
 }
 
 /// Reads a scene directory written by [`write_scene`]: the world, the rays and the range.
