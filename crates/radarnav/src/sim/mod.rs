@@ -20,18 +20,16 @@ mod summary;
 
 pub use summary::{BumpEvent, RunOutcome, RunSummary, SensorCount};
 
-use serde::Serialize;
+use std::collections::VecDeque;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
 use thiserror::Error;
 
 use crate::pose::Pose;
 use crate::scenario::{MountedSensor, Robot, Scenario};
-use std::collections::VecDeque;
-
-use rayon::prelude::*;
-
 use crate::sensor::{PARALLEL_MIN_RAYS, Scan, Tracer, with_pool_tracer};
 use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
 use crate::world::World;
@@ -490,7 +488,10 @@ impl<'a> Simulation<'a> {
     fn prepare_scans(&mut self) {
         let sensors = &self.robot.sensors;
         let (dt, rate, cmd) = (self.settings.dt, self.controller.rate_hz(), self.command);
-        let mut next = self.next_scan.clone();
+        // After the scans still queued, if any: each scan is drawn once.
+        let mut next: Vec<u64> = (self.next_scan.iter().zip(&self.prepared))
+            .map(|(n, queued)| n + queued.len() as u64)
+            .collect();
         let mut jobs: Vec<(usize, f64, Pose)> = Vec::new();
         let mut rays = 0;
         let mut due = |until: f64, pose_at: &dyn Fn(f64) -> Pose, jobs: &mut Vec<_>| {
