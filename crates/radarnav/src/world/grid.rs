@@ -351,3 +351,39 @@ mod tests {
         assert!(g.nx * g.ny <= 24, "{} x {}", g.nx, g.ny);
     }
 }
+
+#[cfg(test)]
+mod extreme_tests {
+    use crate::world::{MaterialTable, Object, Ray, Shape, World};
+    use glam::DVec3;
+
+    /// Objects 1e300 m apart: the grid degenerates to a few cells, but every query answers.
+    #[test]
+    fn queries_on_a_world_of_extreme_extent_answer_without_panicking() {
+        let m = MaterialTable::default();
+        let concrete = m.id("concrete").unwrap();
+        let objects = [0.0, 1e300, -1e300]
+            .into_iter()
+            .map(|x| Object {
+                name: None,
+                shape: Shape::sphere(DVec3::new(x, 0.0, 1.0), 1.0).unwrap(),
+                material: concrete,
+            })
+            .collect();
+        let w = World::new(m, objects);
+        let mut tracer = crate::sensor::Tracer::default();
+        let r = tracer.trace(
+            &w,
+            &Ray::new(DVec3::new(-5.0, 0.0, 1.0), DVec3::X),
+            crate::world::Band::Laser,
+            0.0,
+            100.0,
+        );
+        assert!((r.range - 4.0).abs() < 1e-9, "{r:?}");
+        let mut fan = crate::world::Fan::default();
+        assert!(w.fan(DVec3::new(-5.0, 0.0, 1.0), 100.0, 64, 100, &mut fan));
+        let body = crate::world::overlap::body_box(0.0, 0.0, 0.0, 0.5, 0.5, 0.3);
+        assert_eq!(w.blocking_object(&body), Some(0));
+        assert_eq!(w.objects_at(DVec3::new(1e300, 0.0, 1.0)).count(), 1);
+    }
+}
