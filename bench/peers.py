@@ -18,7 +18,6 @@ one thread) and the thread's CPU clock inside radarnav.
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -42,7 +41,7 @@ def load_scene(scene):
     return world, meta, rays
 
 
-def box_vertices(center, size, yaw):
+def box_mesh(center, size, yaw):
     import open3d as o3d
 
     mesh = o3d.geometry.TriangleMesh.create_box(*size)
@@ -64,7 +63,7 @@ def embree_scene(world, resolution):
             mesh.translate((x, y, z))
         elif "box" in obj:
             b = obj["box"]
-            mesh = box_vertices(b["center"], b["size"], b["yaw"])
+            mesh = box_mesh(b["center"], b["size"], b["yaw"])
         else:
             c = obj["cylinder"]
             mesh = o3d.geometry.TriangleMesh.create_cylinder(c["radius"], c["height"], resolution=64)
@@ -141,6 +140,10 @@ def measure(binary, scene, repeats, resolution, bullet=True):
     embree = embree_scene(world, resolution)
     client = bullet_scene(world) if bullet else None
     rates = {"radarnav laser": [], "radarnav radar": [], "embree": [], "bullet": []}
+    # Embree builds its BVH on the first cast, Bullet its broadphase pairs: not timed.
+    embree_trace(embree, rays[:64], t_max)
+    if bullet:
+        bullet_trace(client, rays[:64], t_max)
     for _ in range(repeats):
         # Interleaved, so that the machine's load falls on every engine alike.
         ours = json.loads(radarnav(binary, "bench", "--rays", str(scene), "--repeats", "1", "--json"))
@@ -183,8 +186,8 @@ def main():
         meta, med, diffs = measure(args.radarnav, d, args.repeats, args.sphere_resolution)
         print(meta["about"])
         print(f"rays per CPU-second, one thread, median of {args.repeats} interleaved runs:")
-        print(f"| engine | M rays / CPU-s | range vs radarnav (median, p99) | hit/miss disagreements |")
-        print(f"|---|---|---|---|")
+        print("| engine | M rays / CPU-s | range vs radarnav (median, p99) | hit/miss disagreements |")
+        print("|---|---|---|---|")
         for k, v in sorted(med.items(), key=lambda kv: -kv[1]):
             d = diffs.get(k)
             extra = f"{d['median_abs_m'] * 100:.2f} cm, {d['p99_abs_m'] * 100:.2f} cm | {d['hit_disagreements']}" if d else "exact (reference) | -"
