@@ -444,6 +444,8 @@ impl World {
     /// Tests grid part `part` against `ray` (once per ray: `q`'s stamps) and files its
     /// intervals in `q`'s pending list: the part alone when its object is solid to a band of
     /// `by_parts`, else the whole object.
+    // Inlined into both callers: the call's own frame cost about a tenth of a forest ray.
+    #[inline(always)]
     fn test_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
         let Part {
             object,
