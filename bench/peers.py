@@ -9,6 +9,8 @@ side, with the range differences against radarnav's exact ranges.
     python3 -m venv target/peers && target/peers/bin/pip install -r bench/requirements.txt
     target/peers/bin/python bench/peers.py               # the 10 000-sphere forest
     target/peers/bin/python bench/peers.py --scaling     # 1k/10k/100k, constant density and area
+    target/release/radarnav bench foliage-wall --export target/fw && \
+      target/peers/bin/python bench/peers.py --scene target/fw    # any scenario's world
 
 Open3D needs libusb-1.0 (Debian: `apt-get install libusb-1.0-0`). Embree sees the spheres as
 triangle meshes (`--sphere-resolution`, Open3D's create_sphere); Bullet and radarnav as exact
@@ -170,6 +172,7 @@ def main():
     ap.add_argument("--sphere-resolution", type=int, default=10,
                     help="Open3D create_sphere resolution (10: 1.3 cm median range error)")
     ap.add_argument("--scaling", action="store_true", help="1k/10k/100k spheres, constant density and fixed area")
+    ap.add_argument("--scene", help="a scene exported by `radarnav bench [SCENARIO] --export DIR` instead of the forest")
     args = ap.parse_args()
     if not Path(args.radarnav).exists():
         sys.exit(f"{args.radarnav}: build it first (cargo build --release -p radarnav-cli)")
@@ -182,7 +185,7 @@ def main():
         return d
 
     if not args.scaling:
-        d = scene("forest-10k", 10000, 200)
+        d = Path(args.scene) if args.scene else scene("forest-10k", 10000, 200)
         meta, med, diffs = measure(args.radarnav, d, args.repeats, args.sphere_resolution)
         print(meta["about"])
         print(f"rays per CPU-second, one thread, median of {args.repeats} interleaved runs:")
