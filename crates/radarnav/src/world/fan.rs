@@ -18,6 +18,8 @@ use super::{Part, World};
 /// Angular margin added to every part's span, radians: far above the rounding of a bearing,
 /// so that a ray on a sector boundary still finds every part it can meet.
 const SPAN_PAD: f64 = 1e-7;
+/// Grid entries allowed per part while counting the parts in range: a part meets a few cells.
+const PART_REPEATS: usize = 8;
 
 /// Candidate parts per azimuth sector, for rays from one origin ([`World::fan`]).
 #[derive(Clone, Debug, Default)]
@@ -100,18 +102,25 @@ impl World {
             return false;
         }
         let reach = DVec2::splat(t_max.min(1e12));
-        let in_range = self.grid.in_rect(o - reach, o + reach);
-        if self.parts.len() > max_parts {
-            // Counted with repeats (a part in several cells): an upper bound is enough here.
-            if in_range.take(max_parts + 1).count() > max_parts {
-                return false;
-            }
-        }
-        let pad = self.grid.pad();
+        // One pass over the cells in range. In a large world it stops early: a part is listed
+        // once per cell it meets, so this many entries mean too many parts.
+        let limit = if self.parts.len() > max_parts {
+            max_parts.saturating_mul(PART_REPEATS).saturating_add(1)
+        } else {
+            usize::MAX
+        };
         fan.ids.clear();
-        fan.ids.extend(self.grid.in_rect(o - reach, o + reach));
+        fan.ids
+            .extend(self.grid.in_rect(o - reach, o + reach).take(limit));
+        if fan.ids.len() >= limit {
+            return false;
+        }
         fan.ids.sort_unstable();
         fan.ids.dedup();
+        if fan.ids.len() > max_parts {
+            return false;
+        }
+        let pad = self.grid.pad();
         for &p in &fan.ids {
             let (lo, hi) = self.part_rects[p as usize];
             let (lo, hi) = (lo - pad, hi + pad);
@@ -199,6 +208,18 @@ mod tests {
         let (a, b) = covering_arc(DVec2::ZERO, &behind).unwrap();
         assert!((b - a - FRAC_PI_2).abs() < 1e-12, "{a} {b}");
         assert!(covering_arc(DVec2::new(2.0, 0.0), &sq).is_none());
+    }
+
+    #[test]
+    fn a_fan_is_refused_only_when_more_parts_than_allowed_are_in_range() {
+        let w = crate::world::forest::forest(400, 60.0, 3);
+        let o = DVec3::new(0.0, 0.0, 0.4);
+        let mut fan = Fan::default();
+        // The whole forest is within 100 m: 400 parts.
+        assert!(!w.fan(o, 100.0, 64, 399, &mut fan));
+        assert!(w.fan(o, 100.0, 64, 400, &mut fan));
+        // Within 3 m of the clearing's centre only a few spheres can be.
+        assert!(w.fan(o, 3.0, 64, 20, &mut fan));
     }
 
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
