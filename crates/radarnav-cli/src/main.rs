@@ -3,6 +3,7 @@
 mod bench_cmd;
 mod compare_cmd;
 mod run_cmd;
+mod signal_cmd;
 
 use std::fs;
 use std::io::Write;
@@ -60,7 +61,9 @@ enum Command {
         #[arg(long, default_value_t = 900)]
         pixels: u32,
     },
-    /// One scan: writes scan.png, scan.json and scan.csv.
+    /// One scan: writes scan.png, scan.json and scan.csv; echoes.csv in `all` mode; for an
+    /// imaging radar (navtech_cts350x, …) polar.png (Oxford layout), radar.timestamps,
+    /// cartesian.png and detections.csv.
     Scan {
         /// A built-in name or a path to a .toml file.
         scenario: String,
@@ -672,13 +675,23 @@ fn scan(
     fs::write(out.join("scan.json"), serde_json::to_vec_pretty(&json)?)
         .context("writing scan.json")?;
     write_csv(&out.join("scan.csv"), &scan, &materials)?;
+    let signal = signal_cmd::write_signal_outputs(
+        &s,
+        &mounted,
+        &sensor_pose,
+        &scan,
+        &materials,
+        &mut rng,
+        out,
+    )?;
     let share = share_past_foliage(&s.world, &scan);
     let returns = scan.ranges.iter().filter(|r| r.is_finite()).count();
     say!(
-        "{} rays, {} returns, {:.1}% see past foliage; wrote scan.png, scan.json, scan.csv to {}",
+        "{} rays, {} returns, {:.1}% see past foliage; wrote scan.png, scan.json, scan.csv{} to {}",
         scan.len(),
         returns,
         100.0 * share,
+        signal.iter().map(|f| format!(", {f}")).collect::<String>(),
         out.display()
     );
     Ok(())

@@ -336,6 +336,8 @@ pub(crate) mod tests {
             materials: vec![None; n],
             beams: vec![Beam::Center; n],
             ranges,
+            echoes: Vec::new(),
+            echo_start: Vec::new(),
         }
     }
 

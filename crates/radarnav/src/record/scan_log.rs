@@ -14,8 +14,18 @@
 //! | n | `u8` beam: 0 centre, 1 left, 2 right |
 //! | 2·n | `u16` material index into the header's `materials`; `0xFFFF` none |
 //!
+//! A sensor in `all` return mode (DESIGN §7.3) has `max_echoes` = E > 0 in its header, and each
+//! record goes on with its echoes, `n + 16·n·E` more bytes:
+//!
+//! | bytes | content |
+//! |---|---|
+//! | n | `u8` echo count of each ray (at most E) |
+//! | 16·n·E | E slots per ray, by range: `f32` range (m), `f32` depth (m, 0 for a surface echo), `f32` power (dB), `u16` material, `u8` kind (0 surface, 1 volume), `u8` specular bounces; unused slots are zero |
+//!
 //! Rays are stored as in [`Scan`]: plane by plane, azimuth by azimuth. In NumPy a record is
-//! `np.dtype([("stamp","<f8"),("pose","<f8",4),("ranges","<f4",n),("hit","u1",n),("beam","u1",n),("material","<u2",n)])`.
+//! `np.dtype([("stamp","<f8"),("pose","<f8",4),("ranges","<f4",n),("hit","u1",n),("beam","u1",n),("material","<u2",n)])`,
+//! with `("echo_count","u1",n),("echoes",[("range","<f4"),("depth","<f4"),("power_db","<f4"),("material","<u2"),("kind","u1"),("bounces","u1")],(n,E))`
+//! appended for an echo log.
 
 use std::io::{self, Write};
 
@@ -24,7 +34,7 @@ use thiserror::Error;
 
 use crate::pose::Pose;
 use crate::scenario::MountedSensor;
-use crate::sensor::{Beam, HitKind, Scan, SensorKind};
+use crate::sensor::{Beam, Echo, EchoKind, HitKind, ReturnMode, Scan, SensorKind};
 use crate::world::{MaterialId, MaterialTable};
 
 /// First eight bytes of a scan log.
@@ -59,7 +69,17 @@ pub struct ScanLogHeader {
     pub mount: Pose,
     /// Material names by index.
     pub materials: Vec<String>,
+    /// Echo slots per ray (`all` return mode); 0 = no echo block.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub max_echoes: usize,
 }
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// Bytes of one echo slot.
+const ECHO_SLOT: usize = 16;
 
 impl ScanLogHeader {
     /// The header for `sensor`, whose scans name materials of `materials`.
@@ -83,11 +103,27 @@ impl ScanLogHeader {
             rate_hz: c.rate_hz,
             mount: sensor.mount,
             materials: materials.names().iter().map(|n| n.to_string()).collect(),
+            max_echoes: if c.signal.return_mode == ReturnMode::All {
+                c.signal.max_echoes
+            } else {
+                0
+            },
         }
     }
 
     fn rays(&self) -> usize {
         self.azimuths * self.elevations.len()
+    }
+
+    /// Bytes of one record.
+    fn record_len(&self) -> usize {
+        let n = self.rays();
+        let echoes = if self.max_echoes > 0 {
+            n + ECHO_SLOT * n * self.max_echoes
+        } else {
+            0
+        };
+        40 + 8 * n + echoes
     }
 }
 
@@ -96,6 +132,7 @@ impl ScanLogHeader {
 pub struct ScanLogWriter<W: Write> {
     out: W,
     rays: usize,
+    max_echoes: usize,
     buf: Vec<u8>,
 }
 
@@ -110,6 +147,7 @@ impl<W: Write> ScanLogWriter<W> {
         Ok(Self {
             out,
             rays: header.rays(),
+            max_echoes: header.max_echoes,
             buf: Vec::new(),
         })
     }
@@ -143,6 +181,26 @@ impl<W: Write> ScanLogWriter<W> {
         }));
         for m in &scan.materials {
             b.extend_from_slice(&m.map_or(u16::MAX, |m| m.0).to_le_bytes());
+        }
+        let slots = self.max_echoes;
+        if slots > 0 {
+            let count = |i: usize| scan.echoes_of(i).len().min(slots);
+            b.extend((0..self.rays).map(|i| count(i) as u8));
+            for i in 0..self.rays {
+                let echoes = &scan.echoes_of(i)[..count(i)];
+                for e in echoes {
+                    b.extend_from_slice(&(e.range as f32).to_le_bytes());
+                    b.extend_from_slice(&(e.depth as f32).to_le_bytes());
+                    b.extend_from_slice(&(e.power_db as f32).to_le_bytes());
+                    b.extend_from_slice(&e.material.0.to_le_bytes());
+                    b.push(match e.kind {
+                        EchoKind::Surface => 0,
+                        EchoKind::Volume => 1,
+                    });
+                    b.push(e.bounces);
+                }
+                b.resize(b.len() + ECHO_SLOT * (slots - echoes.len()), 0);
+            }
         }
         self.out.write_all(b)
     }
@@ -190,7 +248,7 @@ pub fn read_scan_log(bytes: &[u8]) -> Result<(ScanLogHeader, Vec<Scan>), ScanLog
     let header: ScanLogHeader =
         serde_json::from_slice(json).map_err(|e| ScanLogError::Header(e.to_string()))?;
     let n = header.rays();
-    let record = 40 + 8 * n;
+    let record = header.record_len();
     let body = &bytes[12 + len..];
     if !body.len().is_multiple_of(record) {
         return Err(ScanLogError::Truncated(body.len() % record));
@@ -228,7 +286,7 @@ pub fn read_scan_log(bytes: &[u8]) -> Result<(ScanLogHeader, Vec<Scan>), ScanLog
                 }),
             })
             .collect::<Result<_, _>>()?;
-        let materials = r[40 + 6 * n..]
+        let materials = r[40 + 6 * n..40 + 8 * n]
             .chunks_exact(2)
             .map(|c| {
                 let m = u16::from_le_bytes([c[0], c[1]]);
@@ -250,7 +308,117 @@ pub fn read_scan_log(bytes: &[u8]) -> Result<(ScanLogHeader, Vec<Scan>), ScanLog
             hits,
             materials,
             beams,
+            echoes: Vec::new(),
+            echo_start: Vec::new(),
         });
+        if header.max_echoes > 0 {
+            read_echoes(
+                &r[40 + 8 * n..],
+                n,
+                header.max_echoes,
+                k,
+                scans.last_mut().expect("pushed"),
+            )?;
+        }
     }
     Ok((header, scans))
+}
+
+/// Reads the echo block of record `k` into `scan`.
+fn read_echoes(
+    block: &[u8],
+    n: usize,
+    slots: usize,
+    k: usize,
+    scan: &mut Scan,
+) -> Result<(), ScanLogError> {
+    let f32_at = |i: usize| {
+        f64::from(f32::from_le_bytes(
+            block[i..i + 4].try_into().expect("4 bytes"),
+        ))
+    };
+    for i in 0..n {
+        let count = block[i];
+        if usize::from(count) > slots {
+            return Err(ScanLogError::BadCode {
+                scan: k,
+                what: "echo count",
+                code: count,
+            });
+        }
+        scan.echo_start.push(scan.echoes.len() as u32);
+        for j in 0..usize::from(count) {
+            let at = n + ECHO_SLOT * (i * slots + j);
+            let kind = match block[at + 14] {
+                0 => EchoKind::Surface,
+                1 => EchoKind::Volume,
+                code => {
+                    return Err(ScanLogError::BadCode {
+                        scan: k,
+                        what: "echo kind",
+                        code,
+                    });
+                }
+            };
+            scan.echoes.push(Echo {
+                range: f32_at(at),
+                depth: f32_at(at + 4),
+                decay_db_per_m: 0.0,
+                power_db: f32_at(at + 8),
+                material: MaterialId(u16::from_le_bytes([block[at + 12], block[at + 13]])),
+                kind,
+                bounces: block[at + 15],
+            });
+        }
+    }
+    scan.echo_start.push(scan.echoes.len() as u32);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Scenario;
+    use crate::sensor::Tracer;
+    use rand::SeedableRng;
+
+    /// A multi-echo scan of foliage-wall's radar written and read back: the same ranges and
+    /// the same echoes (to f32), behind a header that says how many echo slots a ray has.
+    #[test]
+    fn echo_scans_read_back() {
+        let src = crate::scenario::builtin_source("foliage-wall").unwrap();
+        let src = src.replace(
+            "preset = \"radar_thesis\"",
+            "preset = \"radar_thesis\"\nreturn = \"all\"\nmax_echoes = 3",
+        );
+        let s = Scenario::from_toml(&src, "fw.toml", "fw").unwrap();
+        let sensor = &s.robots[0].sensors[0];
+        let header = ScanLogHeader::new(sensor, s.world.materials());
+        assert_eq!(header.max_echoes, 3);
+        let pose = s.robots[0].start.compose(&sensor.mount);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let scans: Vec<Scan> = (0..2)
+            .map(|k| {
+                let stamp = f64::from(k) * 0.25;
+                let mut tr = Tracer::default();
+                sensor.config.scan(&s.world, &pose, stamp, &mut rng, &mut tr)
+            })
+            .collect();
+        assert!(scans[0].echoes.len() > scans[0].len(), "several echoes per ray");
+        let mut w = ScanLogWriter::new(Vec::new(), &header).unwrap();
+        for scan in &scans {
+            w.write(scan).unwrap();
+        }
+        let bytes = w.finish().unwrap();
+        let (h, back) = read_scan_log(&bytes).unwrap();
+        assert_eq!(h, header);
+        for (a, b) in scans.iter().zip(&back) {
+            assert_eq!(a.ranges, b.ranges);
+            assert_eq!(a.echo_start, b.echo_start);
+            for (x, y) in a.echoes.iter().zip(&b.echoes) {
+                assert_eq!((x.range as f32, x.power_db as f32), (y.range as f32, y.power_db as f32));
+                assert_eq!((x.material, x.kind, x.bounces), (y.material, y.kind, y.bounces));
+            }
+        }
+    }
 }

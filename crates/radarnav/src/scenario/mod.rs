@@ -41,7 +41,7 @@ use crate::nav::{
 use crate::pose::Pose;
 use crate::sensor::{SensorConfig, preset};
 use crate::vehicle::{DriveCommand, OdometryNoise, VEHICLES, VehicleSpec, vehicle};
-use crate::world::{Material, MaterialTable, Object, Shape, World};
+use crate::world::{DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialTable, Object, Shape, World};
 use spec::{Center, MissionSpec, ObjectSpec, ScenarioSpec, SensorSpec, Xy};
 
 /// A scenario file that could not be used: where, which key, and what is wrong.
@@ -296,6 +296,21 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                 .specular
                 .or(base.as_ref().map(|b| b.specular))
                 .unwrap_or(false),
+            radar_backscatter_per_m: m
+                .radar_backscatter_per_m
+                .map(|v| v.0)
+                .or(base.as_ref().map(|b| b.radar_backscatter_per_m))
+                .unwrap_or(0.0),
+            specular_lobe: m
+                .specular_lobe_deg
+                .map(|v| v.0.to_radians())
+                .or(base.as_ref().map(|b| b.specular_lobe))
+                .unwrap_or(DEFAULT_SPECULAR_LOBE_DEG.to_radians()),
+            laser_extinction_per_m: m
+                .laser_extinction_per_m
+                .map(|v| v.0)
+                .or(base.as_ref().map(|b| b.laser_extinction_per_m))
+                .unwrap_or(0.0),
             laser_opaque,
             // An opaque base stores an infinite laser attenuation; a variant made see-through
             // must not inherit it, or `laser_opaque = false` would change nothing.
@@ -516,6 +531,75 @@ fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, Sce
     set(&mut c.side_beam_offset, spec.side_beam_offset.map(|v| v.0));
     if let Some(el) = &spec.elevations_deg {
         c.elevations = el.iter().map(|e| e.0.to_radians()).collect();
+    }
+    if let Some(b) = spec.range_bin {
+        c.range_bin = Some(b.0);
+    }
+    let g = &mut c.signal;
+    if let Some(m) = spec.return_mode {
+        g.return_mode = m;
+    }
+    if let Some(l) = spec.range_law {
+        g.range_law = l;
+    }
+    if let Some(sel) = spec.selection {
+        g.selection = sel;
+    }
+    set(&mut g.dynamic_range_db, spec.dynamic_range_db.map(|v| v.0));
+    set(
+        &mut g.detection_threshold_db,
+        spec.detection_threshold_db.map(|v| v.0),
+    );
+    set(
+        &mut g.beamwidth_az,
+        spec.beamwidth_az_deg.map(|v| v.0.to_radians()),
+    );
+    set(
+        &mut g.beamwidth_el,
+        spec.beamwidth_el_deg.map(|v| v.0.to_radians()),
+    );
+    if let Some(n) = spec.max_echoes {
+        g.max_echoes = n as usize;
+    }
+    if let Some(n) = spec.max_bounces {
+        g.max_bounces = n;
+    }
+    if let Some(n) = spec.beam_rays {
+        g.beam_rays_az = n as usize;
+    }
+    if let Some(n) = spec.beam_rays_el {
+        g.beam_rays_el = n as usize;
+    }
+    let image_keys = spec.bandwidth_hz.is_some()
+        || spec.noise_floor_db.is_some()
+        || spec.display_range_db.is_some()
+        || spec.speckle.is_some();
+    if image_keys && g.image.is_none() {
+        return Err(ctx.err(
+            s.span(),
+            None,
+            format!(
+                "sensor `{}`: bandwidth_hz, noise_floor_db, display_range_db and speckle need a preset with a power image (navtech_cts350x, navtech_cir204h, fmcw_scanning)",
+                spec.name
+            ),
+        ));
+    }
+    if let Some(im) = &mut g.image {
+        set(&mut im.bandwidth_hz, spec.bandwidth_hz.map(|v| v.0));
+        set(&mut im.noise_floor_db, spec.noise_floor_db.map(|v| v.0));
+        set(&mut im.display_range_db, spec.display_range_db.map(|v| v.0));
+        if let Some(sp) = spec.speckle {
+            im.speckle = sp;
+        }
+    }
+    if c.signal.return_mode != crate::sensor::ReturnMode::Thesis
+        && c.kind != crate::sensor::SensorKind::Radar
+    {
+        return Err(ctx.err(
+            s.span(),
+            Some("return"),
+            format!("sensor `{}`: echo return modes are for radars", spec.name),
+        ));
     }
     c.validate().map_err(|msg| {
         let key = msg.split_whitespace().next().map(str::to_owned);

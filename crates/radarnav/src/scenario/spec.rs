@@ -34,6 +34,12 @@ checked_f64! {
     NonNegative: |v| v >= 0.0, "a number >= 0";
     /// A number in [0, 1].
     Fraction: |v| (0.0..=1.0).contains(&v), "a number from 0 to 1";
+    /// A volume backscatter coefficient, 1/m.
+    Backscatter: |v| (0.0..=10.0).contains(&v), "a number from 0 to 10 (1/m)";
+    /// A lobe width in degrees.
+    LobeDeg: |v| (0.1..=90.0).contains(&v), "a number from 0.1 to 90 (degrees)";
+    /// An extinction coefficient, 1/m.
+    Extinction: |v| (0.0..=100.0).contains(&v), "a number from 0 to 100 (1/m)";
 }
 
 /// A point `[x, y]` (resting on the ground) or `[x, y, z]`.
@@ -213,6 +219,12 @@ pub struct MaterialSpec {
     pub radar_reflectivity: Option<Fraction>,
     /// Mirror-like to radar.
     pub specular: Option<bool>,
+    /// Volume backscatter η, 1/m (0–10).
+    pub radar_backscatter_per_m: Option<Backscatter>,
+    /// Full width of a specular echo lobe, degrees (0.1–90).
+    pub specular_lobe_deg: Option<LobeDeg>,
+    /// Laser aerosol extinction k, 1/m (0–100).
+    pub laser_extinction_per_m: Option<Extinction>,
     /// Stops a laser at its surface.
     pub laser_opaque: Option<bool>,
     /// Laser dB/m when not opaque.
@@ -423,4 +435,37 @@ pub struct SensorSpec {
     pub penetration_db: Option<Positive>,
     /// Override, m.
     pub side_beam_offset: Option<NonNegative>,
+    /// Override: range bin of a binned radar, m.
+    pub range_bin: Option<Positive>,
+    /// Return mode: thesis, first, strongest, last, all (DESIGN §7.3).
+    #[serde(rename = "return")]
+    pub return_mode: Option<crate::sensor::ReturnMode>,
+    /// Echo range law: r2, r4, flat.
+    pub range_law: Option<crate::sensor::RangeLaw>,
+    /// dB, 1–200.
+    pub dynamic_range_db: Option<Finite>,
+    /// dB, −200–0.
+    pub detection_threshold_db: Option<Finite>,
+    /// Echoes per azimuth in `all` mode, 1–64.
+    pub max_echoes: Option<u32>,
+    /// Specular bounces, 0–8.
+    pub max_bounces: Option<u8>,
+    /// Beam rays across azimuth (× `beam_rays_el` ≤ 64).
+    pub beam_rays: Option<u32>,
+    /// Beam rays across elevation.
+    pub beam_rays_el: Option<u32>,
+    /// −3 dB beam width in azimuth, degrees.
+    pub beamwidth_az_deg: Option<NonNegative>,
+    /// −3 dB beam width in elevation, degrees.
+    pub beamwidth_el_deg: Option<NonNegative>,
+    /// Beam ray selection: uniform, incidence_weighted, nearest, strongest.
+    pub selection: Option<crate::sensor::Selection>,
+    /// Power image: chirp bandwidth, Hz.
+    pub bandwidth_hz: Option<Positive>,
+    /// Power image: mean noise power, dB.
+    pub noise_floor_db: Option<Finite>,
+    /// Power image: dB above the noise floor shown as 255.
+    pub display_range_db: Option<Positive>,
+    /// Power image: speckle on or off.
+    pub speckle: Option<bool>,
 }

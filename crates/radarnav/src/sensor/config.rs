@@ -2,6 +2,8 @@
 
 use serde::Serialize;
 
+use super::echo::RangeLaw;
+use super::signal::{ImageConfig, ReturnMode, Selection, SignalConfig};
 use crate::world::Band;
 
 /// Which model a sensor follows.
@@ -60,6 +62,8 @@ pub struct SensorConfig {
     pub side_beam_offset: f64,
     /// Range bin size of a binned (FMCW) radar; returns are reported at the bin centre.
     pub range_bin: Option<f64>,
+    /// Beam, echoes, return mode and power image (DESIGN §7); unused in `thesis` mode.
+    pub signal: SignalConfig,
 }
 
 /// A named preset with a one-line description.
@@ -110,15 +114,43 @@ fn radar_thesis() -> SensorConfig {
         penetration_db: THESIS_PENETRATION_DB,
         side_beam_offset: 0.0,
         range_bin: None,
+        signal: SignalConfig::default(),
     }
 }
 
-fn navtech(bin: f64, bins: u32) -> SensorConfig {
+/// Navtech's beam: 1.8° in azimuth and elevation (RADIATE's description of the CTS350-X; no
+/// beam pattern is published), sampled by 3 × 3 rays.
+const NAVTECH_BEAMWIDTH_DEG: f64 = 1.8;
+
+/// A Navtech-like FMCW scanning radar with `bins` range bins of `bin` metres: the whole echo
+/// model, `all` returns, range-independent power (its high-pass filter, Jose & Adams 2006) and
+/// a power image. The 76–77 GHz sweep gives B = 1 GHz (0.15 m point spread); the noise floor
+/// (−50 dB) and display range (50 dB: a concrete wall face-on is about 230 of 255) are chosen.
+fn fmcw(resolution_deg: f64, bin: f64, bins: u32) -> SensorConfig {
     SensorConfig {
-        resolution: deg(0.9),
+        resolution: deg(resolution_deg),
         range_min: bin,
         range_max: bin * f64::from(bins),
         range_bin: Some(bin),
+        signal: SignalConfig {
+            return_mode: ReturnMode::All,
+            range_law: RangeLaw::Flat,
+            dynamic_range_db: 50.0,
+            detection_threshold_db: -40.0,
+            beam_rays_az: 3,
+            beam_rays_el: 3,
+            beamwidth_az: deg(NAVTECH_BEAMWIDTH_DEG),
+            beamwidth_el: deg(NAVTECH_BEAMWIDTH_DEG),
+            selection: Selection::Strongest,
+            image: Some(ImageConfig {
+                bandwidth_hz: 1e9,
+                noise_floor_db: -50.0,
+                display_range_db: 50.0,
+                speckle: true,
+                encoder_size: 5600,
+            }),
+            ..SignalConfig::default()
+        },
         ..radar_thesis()
     }
 }
@@ -144,6 +176,7 @@ fn laser(
         penetration_db: LASER_MARGIN_DB,
         side_beam_offset: 0.0,
         range_bin: None,
+        signal: SignalConfig::default(),
     }
 }
 
@@ -173,12 +206,17 @@ pub const PRESETS: &[Preset] = &[
     Preset {
         name: "navtech_cts350x",
         about: "Navtech CTS350-X (Oxford Radar RobotCar): 400 azimuths, 4 Hz, 3768 bins of 0.0438 m",
-        make: || navtech(0.0438, 3768),
+        make: || fmcw(0.9, 0.0438, 3768),
     },
     Preset {
         name: "navtech_cir204h",
         about: "Navtech CIR204-H (MulRan, Boreas): 400 azimuths, 4 Hz, 3360 bins of 0.0596 m ≈ 200 m",
-        make: || navtech(0.0596, 3360),
+        make: || fmcw(0.9, 0.0596, 3360),
+    },
+    Preset {
+        name: "fmcw_scanning",
+        about: "generic FMCW scanning radar: 1° azimuths, 4 Hz, 1000 bins of 0.05 m (50 m); every figure settable",
+        make: || fmcw(1.0, 0.05, 1000),
     },
     Preset {
         name: "hokuyo_urg04lx",
@@ -314,6 +352,10 @@ impl SensorConfig {
         ];
         if let Some((_, key, msg)) = checks.iter().find(|c| !c.0) {
             return Err(format!("{key} {msg}"));
+        }
+        self.signal.validate()?;
+        if self.signal.image.is_some() && self.range_bin.is_none() {
+            return Err("range_bin must be set for a sensor with a power image".into());
         }
         let rays = self.azimuth_count().saturating_mul(self.elevations.len());
         if rays > MAX_RAYS {

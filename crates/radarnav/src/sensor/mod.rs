@@ -4,10 +4,17 @@
 //! return closer than `range_min`, REP-117) and adds, per ray, how it ended, the material that
 //! stopped it and which of the three side beams was reported.
 
+pub mod cfar;
 pub mod config;
+pub mod echo;
+pub mod image;
+mod returns;
+pub mod signal;
 pub mod trace;
 
 pub use config::{PRESETS, Preset, SensorConfig, SensorKind, preset};
+pub use echo::{Echo, EchoKind, RangeLaw};
+pub use signal::{ImageConfig, ReturnMode, Selection, SignalConfig};
 pub use trace::{HitKind, Return, Tracer};
 
 use glam::DVec3;
@@ -112,6 +119,14 @@ pub struct Scan {
     pub materials: Vec<Option<MaterialId>>,
     /// Which side beam each reading came from.
     pub beams: Vec<Beam>,
+    /// Echoes of every ray in `all` mode, ray after ray, each ray's by range (DESIGN §7.3);
+    /// empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub echoes: Vec<Echo>,
+    /// Where each ray's echoes start in `echoes`, one more entry than rays; empty when
+    /// `echoes` is unused.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub echo_start: Vec<u32>,
 }
 
 impl Scan {
@@ -145,6 +160,14 @@ impl Scan {
         )
     }
 
+    /// The echoes of ray `i` (empty unless the scan was taken in `all` mode).
+    pub fn echoes_of(&self, i: usize) -> &[Echo] {
+        match (self.echo_start.get(i), self.echo_start.get(i + 1)) {
+            (Some(&a), Some(&b)) => &self.echoes[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
     /// The world point of a finite reading, `None` for `±inf`.
     pub fn endpoint(&self, i: usize) -> Option<DVec3> {
         let r = self.ranges[i];
@@ -169,8 +192,11 @@ fn beam_ray(pose: &Pose, az: f64, (se, ce): (f64, f64), lateral: f64) -> Ray {
 /// The random draws of one scan, in ray order: which side beam each ray reports and its
 /// standard-normal range noise ([`SensorConfig::draw`]). Drawn before any ray is traced, so
 /// that a scan does not depend on how its rays, or a run's scans, are shared among threads.
+///
+/// A sensor with a signal model and a random beam selection also draws, per ray, a uniform
+/// number in [0, 1) that picks the answering beam ray; the thesis model draws exactly as before.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ScanDraws(Vec<(Beam, f64)>);
+pub struct ScanDraws(Vec<(Beam, f64)>, Vec<f64>);
 
 impl SensorConfig {
     /// One scan from a sensor at `pose` (world frame) at time `stamp`. Random draws (side-beam
@@ -194,23 +220,43 @@ impl SensorConfig {
         let n = self.azimuth_count() * self.elevations.len();
         let noisy = self.range_noise_std > 0.0 || self.range_noise_rel > 0.0;
         let side_beams = self.has_side_beams();
-        ScanDraws(
-            (0..n)
-                .map(|_| {
-                    let beam = if side_beams {
-                        [Beam::Center, Beam::Left, Beam::Right][rng.random_range(0..3)]
-                    } else {
-                        Beam::Center
-                    };
-                    let noise: f64 = if noisy {
-                        rng.sample(StandardNormal)
-                    } else {
-                        0.0
-                    };
-                    (beam, noise)
-                })
-                .collect(),
-        )
+        let sig = &self.signal;
+        let echo_mode = sig.return_mode != ReturnMode::Thesis;
+        // The thesis' side-beam draw is the uniform selection among three rays.
+        let beam_draw = side_beams && (!echo_mode || sig.selection == Selection::Uniform);
+        let select_draw = echo_mode
+            && !beam_draw
+            && sig.selection.random()
+            && sig.beam(self.side_offset()).len() > 1;
+        let mut select = Vec::new();
+        let rays = (0..n)
+            .map(|_| {
+                let beam = if beam_draw {
+                    [Beam::Center, Beam::Left, Beam::Right][rng.random_range(0..3)]
+                } else {
+                    Beam::Center
+                };
+                if select_draw {
+                    select.push(rng.random::<f64>());
+                }
+                let noise: f64 = if noisy {
+                    rng.sample(StandardNormal)
+                } else {
+                    0.0
+                };
+                (beam, noise)
+            })
+            .collect();
+        ScanDraws(rays, select)
+    }
+
+    /// The side-beam offset in use (0 for ground truth).
+    fn side_offset(&self) -> f64 {
+        if self.has_side_beams() {
+            self.side_beam_offset
+        } else {
+            0.0
+        }
     }
 
     /// Whether this sensor reports one of three parallel rays (the thesis' side beams).
@@ -233,6 +279,9 @@ impl SensorConfig {
         let n = azimuths * self.elevations.len();
         let band = self.kind.band();
         let side_beams = self.has_side_beams();
+        if self.signal.return_mode != ReturnMode::Thesis {
+            return self.trace_echo_scan(world, pose, stamp, draws, parallel_min);
+        }
         let draws = &draws.0;
         assert_eq!(draws.len(), n, "draws of another sensor");
         let mut out = Scan {
@@ -254,6 +303,8 @@ impl SensorConfig {
             hits: Vec::with_capacity(n),
             materials: Vec::with_capacity(n),
             beams: Vec::with_capacity(n),
+            echoes: Vec::new(),
+            echo_start: Vec::new(),
         };
         let plane_sin_cos: Vec<(f64, f64)> = self.elevations.iter().map(|e| e.sin_cos()).collect();
         // Rays that all leave the sensor's origin share one set of candidate lists, unless

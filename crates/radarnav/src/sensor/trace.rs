@@ -52,6 +52,8 @@ pub struct Tracer {
     pub(crate) fan: Fan,
     /// Volumes the ray is currently inside: (exit distance, dB/m, material).
     active: Vec<(f64, f64, MaterialId)>,
+    /// The echo walk's buffers, for sensors with a signal model.
+    pub(crate) echo: super::echo::EchoTracer,
 }
 
 impl Tracer {

@@ -15,9 +15,26 @@
 //! | `concrete`, `wood`, `metal`, `absorber` | solid | opaque | stop both rays at the surface |
 //! | `ground` | solid | opaque | the plane z = 0 under every world; a ray tilted down ends there |
 //!
-//! Radar reflectivities (power fraction at normal incidence) are rough values from 60–77 GHz
-//! reflection measurements (metal ≈ 1, concrete ≈ 0.35, wood ≈ 0.2, glass ≈ 0.25, foliage ≈
-//! 0.1, absorber 0); the thesis model does not use them, the echo model will.
+//! The echo model (DESIGN §7.2) adds, per material, a reflectivity ρ (power fraction returned
+//! at entry, normal incidence), a volume backscatter coefficient η (power fraction scattered
+//! back per metre inside), the width of a specular material's lobe, and, for the laser in
+//! aerosols (§7.6), an extinction coefficient k. The thesis model uses none of them.
+//!
+//! | material | ρ | η (1/m) | specular lobe | laser k (1/m) | source |
+//! |---|---|---|---|---|---|
+//! | `concrete` | 0.35 | 0 | diffuse | 0 | rough value of 60–77 GHz reflection measurements of concrete walls (|Γ|² ≈ 0.3–0.4) |
+//! | `metal` | 1.0 | 0 | 10° | 0 | a conductor reflects all; the lobe width is chosen |
+//! | `wood` | 0.2 | 0 | diffuse | 0 | rough value of mm-wave measurements of wooden boards |
+//! | `glass` | 0.25 | 0 | 10° | 0 | ≈ 25 % power reflection of a pane at 60–77 GHz; lobe chosen |
+//! | `foliage_light` | 0.1 | 0.1 | diffuse | 0 | ρ chosen (leaves are a weak, diffuse surface); η chosen so that a metre of hedge glows about as bright as its surface |
+//! | `foliage_dense` | 0.1 | 0.2 | diffuse | 0 | chosen as above, twice the scatterers |
+//! | `smoke` | 0 | 0 | diffuse | 0 | no mm-wave echo; laser k is 0 so that the thesis' opaque smoke stays as it was; set `laser_extinction_per_m` (e.g. 0.5: a laser sees about 2 m in) with `laser_opaque = false` for scattered returns |
+//! | `dust` | 0 | 1e-4 | diffuse | 0 | η chosen (a faint haze); laser as for smoke |
+//! | `absorber` | 0 | 0 | diffuse | 0 | by definition: no echo, nothing behind |
+//! | `ground` | 0.15 | 0 | diffuse | 0 | chosen: a grazing ground echo is weak |
+//!
+//! "Chosen" marks figures with no published source: they only set how bright an echo is
+//! relative to the others, and every one can be overridden in a scenario's `[[material]]`.
 
 use serde::Serialize;
 
@@ -47,10 +64,18 @@ pub struct Material {
     pub radar_reflectivity: f64,
     /// Whether radar rays mirror off it.
     pub specular: bool,
+    /// Volume backscatter η inside a penetrable material: power fraction returned per metre
+    /// (DESIGN §7.2). 0 for solids.
+    pub radar_backscatter_per_m: f64,
+    /// Full width (−3 dB) of a specular material's echo lobe around normal incidence, radians.
+    pub specular_lobe: f64,
     /// Whether a laser ray stops at its surface.
     pub laser_opaque: bool,
     /// Laser loss inside when not opaque, dB/m.
     pub laser_attenuation_db_per_m: f64,
+    /// Aerosol extinction k, 1/m: a laser ray inside returns from the particles at depth d
+    /// with probability 1 − exp(−k·d) (DESIGN §7.6); 0 = no particle returns.
+    pub laser_extinction_per_m: f64,
     /// Whether a robot may drive through it.
     pub traversable: bool,
     /// Colour in figures, RGB.
@@ -89,15 +114,25 @@ fn builtin(
         radar_attenuation_db_per_m: radar,
         radar_reflectivity: reflectivity,
         specular,
+        radar_backscatter_per_m: 0.0,
+        specular_lobe: DEFAULT_SPECULAR_LOBE_DEG.to_radians(),
         laser_opaque: laser.is_none(),
         laser_attenuation_db_per_m: laser.unwrap_or(f64::INFINITY),
+        laser_extinction_per_m: 0.0,
         traversable,
         color,
     }
 }
 
+/// Default full width of a specular echo lobe, degrees (chosen: a smooth wall or pane).
+pub const DEFAULT_SPECULAR_LOBE_DEG: f64 = 10.0;
+
 /// The built-in materials, in a fixed order (their ids in a fresh table).
 pub fn builtin_materials() -> Vec<Material> {
+    let backscatter = |m: Material, eta: f64| Material {
+        radar_backscatter_per_m: eta,
+        ..m
+    };
     let inf = f64::INFINITY;
     vec![
         builtin("concrete", inf, 0.35, false, None, false, [150, 150, 150]),
@@ -112,18 +147,27 @@ pub fn builtin_materials() -> Vec<Material> {
             false,
             [150, 210, 230],
         ),
-        builtin(
-            "foliage_light",
-            1.55,
+        backscatter(
+            builtin(
+                "foliage_light",
+                1.55,
+                0.1,
+                false,
+                None,
+                false,
+                [120, 200, 90],
+            ),
             0.1,
-            false,
-            None,
-            false,
-            [120, 200, 90],
         ),
-        builtin("foliage_dense", 3.0, 0.1, false, None, false, [40, 130, 50]),
+        backscatter(
+            builtin("foliage_dense", 3.0, 0.1, false, None, false, [40, 130, 50]),
+            0.2,
+        ),
         builtin("smoke", 0.0, 0.0, false, None, true, [175, 170, 185]),
-        builtin("dust", 0.02, 0.0, false, Some(20.0), true, [205, 185, 140]),
+        backscatter(
+            builtin("dust", 0.02, 0.0, false, Some(20.0), true, [205, 185, 140]),
+            1e-4,
+        ),
         builtin("absorber", inf, 0.0, false, None, false, [60, 40, 60]),
         builtin("ground", inf, 0.15, false, None, true, [200, 190, 160]),
     ]

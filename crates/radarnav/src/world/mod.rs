@@ -8,7 +8,9 @@ pub mod overlap;
 pub mod shape;
 
 pub use fan::Fan;
-pub use material::{Band, Material, MaterialId, MaterialTable, builtin_materials};
+pub use material::{
+    Band, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialId, MaterialTable, builtin_materials,
+};
 pub use shape::{OrientedBox, Ray, Shape, ShapeError};
 
 use shape::sphere_interval;

@@ -114,6 +114,27 @@ impl OrientedBox {
         l.abs().cmple(self.half).all()
     }
 
+    /// How far `p` lies outside the box's surface along its nearest face's normal (negative
+    /// inside), and that face's outward normal in the world frame.
+    fn face_at(&self, p: DVec3) -> (f64, DVec3) {
+        let l = self.local_vec(p - self.center);
+        let excess = l.abs() - self.half;
+        let (axis, dist) = if excess.x >= excess.y && excess.x >= excess.z {
+            (0, excess.x)
+        } else if excess.y >= excess.z {
+            (1, excess.y)
+        } else {
+            (2, excess.z)
+        };
+        let (c, s) = (self.cos_sin.x, self.cos_sin.y);
+        let n = match axis {
+            0 => DVec3::new(c, s, 0.0) * l.x.signum(),
+            1 => DVec3::new(-s, c, 0.0) * l.y.signum(),
+            _ => DVec3::new(0.0, 0.0, l.z.signum()),
+        };
+        (dist, n)
+    }
+
     /// The corners of the footprint grown by `pad` on every side, counter-clockwise.
     pub fn corners(&self, pad: f64) -> [DVec2; 4] {
         let (c, s) = (self.cos_sin.x, self.cos_sin.y);
@@ -450,6 +471,73 @@ impl Shape {
                 }
                 out.truncate(w);
                 merge_tail(out, start);
+            }
+        }
+    }
+
+    /// The outward unit normal of the surface nearest to `p`, a point on (or within rounding
+    /// of) the surface: where a ray enters, for the incidence angle of its echo and the
+    /// direction of a mirrored ray (DESIGN §7.2).
+    pub fn normal_at(&self, p: DVec3) -> DVec3 {
+        let radial = |c: DVec3| {
+            let v = DVec3::new(p.x - c.x, p.y - c.y, 0.0);
+            v.try_normalize().unwrap_or(DVec3::X)
+        };
+        match self {
+            Self::Sphere { center, .. } => (p - *center).try_normalize().unwrap_or(DVec3::Z),
+            Self::Box(b) => b.face_at(p).1,
+            Self::Cylinder {
+                center,
+                radius,
+                half_height,
+            } => {
+                let side = p.truncate().distance(center.truncate()) - radius;
+                let cap = (p.z - center.z).abs() - half_height;
+                if cap > side {
+                    DVec3::new(0.0, 0.0, (p.z - center.z).signum())
+                } else {
+                    radial(*center)
+                }
+            }
+            Self::Wall { segments, .. } => segments
+                .iter()
+                .map(|b| b.face_at(p))
+                .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
+                .map_or(DVec3::Z, |f| f.1),
+            Self::Prism {
+                polygon,
+                z_min,
+                z_max,
+            } => {
+                let q = p.truncate();
+                let n = polygon.len();
+                let (edge_dist, edge_normal) = (0..n)
+                    .map(|i| {
+                        let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+                        let e = b - a;
+                        let t = ((q - a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+                        let d = q.distance(a + e * t);
+                        (d, e.perp().normalize_or_zero())
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .unwrap_or((f64::INFINITY, DVec2::X));
+                let (cap_dist, up) = if (p.z - z_min).abs() < (z_max - p.z).abs() {
+                    ((p.z - z_min).abs(), -1.0)
+                } else {
+                    ((z_max - p.z).abs(), 1.0)
+                };
+                if cap_dist < edge_dist {
+                    DVec3::new(0.0, 0.0, up)
+                } else {
+                    // Outward whatever the winding: away from the polygon's inside.
+                    let probe = q + edge_normal * 1e-6;
+                    let sign = if point_in_polygon(polygon, probe) {
+                        -1.0
+                    } else {
+                        1.0
+                    };
+                    (edge_normal * sign).extend(0.0)
+                }
             }
         }
     }

@@ -1,0 +1,557 @@
+//! The radar's echoes along one ray (DESIGN §7.2).
+//!
+//! The same front-to-back interval walk as the thesis model ([`super::trace`]), but instead of
+//! one range it yields every echo the ray produces: a surface echo at each entry into a
+//! reflecting material, a volume echo over each stretch inside a scattering one (foliage glows
+//! over its depth), and the echoes of mirrored rays off specular materials, placed at half
+//! their round-trip path along the original azimuth (ghosts). The walk stops at the first
+//! solid, at `t_max`, or as soon as the two-way loss has used the dynamic range: nothing behind
+//! that point could rise above the noise floor, and no work is done for it.
+//!
+//! Power is in dB relative to a reflector of ρ = 1 at normal incidence and 1 m under the same
+//! range law, so 0 dB is the strongest echo a range of 1 m or more can give. An echo weaker than
+//! `−dynamic_range_db` is dropped.
+
+use std::f64::consts::LN_10;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::world::{Band, IntervalSource, MaterialId, Ray, RayQuery, World};
+
+/// How an echo's power falls with range R.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RangeLaw {
+    /// ∝ R⁻²: extended, beam-filling surfaces.
+    R2,
+    /// ∝ R⁻⁴: point targets (the radar equation).
+    R4,
+    /// Range-independent: a sensor's own range compensation (Navtech's high-pass filter).
+    Flat,
+}
+
+impl RangeLaw {
+    /// The law's gain in dB at range `r` (0 dB at 1 m). Ranges under 1 cm count as 1 cm.
+    pub fn gain_db(self, r: f64) -> f64 {
+        let r = r.max(0.01);
+        match self {
+            Self::R2 => -20.0 * r.log10(),
+            Self::R4 => -40.0 * r.log10(),
+            Self::Flat => 0.0,
+        }
+    }
+
+    /// Lowercase name, as in files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::R2 => "r2",
+            Self::R4 => "r4",
+            Self::Flat => "flat",
+        }
+    }
+}
+
+/// What made an echo.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EchoKind {
+    /// Reflection at the entry into a material.
+    Surface,
+    /// Backscatter from inside a penetrable material, spread over `depth`.
+    Volume,
+}
+
+impl EchoKind {
+    /// Lowercase name, as in files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Surface => "surface",
+            Self::Volume => "volume",
+        }
+    }
+}
+
+/// One echo of a ray.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Echo {
+    /// Apparent range, m: half the round-trip path (for a volume echo, where it begins).
+    pub range: f64,
+    /// Extent along range of a volume echo, m; 0 for a surface echo.
+    pub depth: f64,
+    /// Two-way decay of a volume echo's power density along its depth, dB/m.
+    pub decay_db_per_m: f64,
+    /// Power, dB relative to a ρ = 1 reflector at normal incidence and 1 m.
+    pub power_db: f64,
+    /// The material that made it.
+    pub material: MaterialId,
+    /// Surface or volume.
+    pub kind: EchoKind,
+    /// Specular bounces before it (0 = a direct echo; more = a ghost).
+    pub bounces: u8,
+}
+
+/// What the echo walk needs of a sensor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EchoModel {
+    /// Range law of the echo power.
+    pub range_law: RangeLaw,
+    /// Echoes weaker than `−dynamic_range_db` are dropped, and the walk stops once its
+    /// two-way loss exceeds it.
+    pub dynamic_range_db: f64,
+    /// Specular bounces followed per ray.
+    pub max_bounces: u8,
+}
+
+/// A volume echo is cut into pieces of at most this depth, m, so that the range law, taken at
+/// each piece's middle, stays close to its value across the piece.
+pub const VOLUME_PIECE_M: f64 = 2.0;
+
+/// A mirrored ray still to walk.
+#[derive(Clone, Copy, Debug)]
+struct Leg {
+    ray: Ray,
+    /// Path already travelled to the ray's origin, m (one way).
+    path: f64,
+    /// One-way loss already suffered, dB.
+    loss_db: f64,
+    bounces: u8,
+    /// Path left within range, m.
+    t_max: f64,
+}
+
+/// Reusable buffers of the echo walk; one per thread.
+#[derive(Clone, Debug, Default)]
+pub struct EchoTracer {
+    query: RayQuery,
+    /// Volumes the ray is inside: (exit, dB/m, η, material).
+    active: Vec<(f64, f64, f64, MaterialId)>,
+    legs: Vec<Leg>,
+}
+
+/// Ten to the power `db / 10`.
+fn from_db(db: f64) -> f64 {
+    (db * (LN_10 / 10.0)).exp()
+}
+
+/// Ten times the log of `x`.
+fn to_db(x: f64) -> f64 {
+    10.0 * x.log10()
+}
+
+impl EchoTracer {
+    /// Appends to `out` every echo of `ray` (beam weight `weight`) through `world` within
+    /// `t_max` metres of path, in the order the walk meets them (by range within each leg;
+    /// ghosts after the direct echoes). Returns the incidence cosine at the first surface met
+    /// (1 when none), for incidence-weighted beam selection.
+    pub fn echoes(
+        &mut self,
+        world: &World,
+        ray: &Ray,
+        weight: f64,
+        t_max: f64,
+        model: &EchoModel,
+        out: &mut Vec<Echo>,
+    ) -> f64 {
+        let mut first_cos = None;
+        self.legs.clear();
+        self.legs.push(Leg {
+            ray: *ray,
+            path: 0.0,
+            loss_db: -to_db(weight),
+            bounces: 0,
+            t_max,
+        });
+        while let Some(leg) = self.legs.pop() {
+            let cos = self.walk_leg(world, &leg, model, out);
+            if leg.bounces == 0 {
+                first_cos = cos;
+            }
+        }
+        first_cos.unwrap_or(1.0)
+    }
+
+    /// Walks one leg; returns the incidence cosine at its first surface.
+    fn walk_leg(
+        &mut self,
+        world: &World,
+        leg: &Leg,
+        model: &EchoModel,
+        out: &mut Vec<Echo>,
+    ) -> Option<f64> {
+        let ray = leg.ray;
+        let floor = -model.dynamic_range_db;
+        // The ground plane z = 0 is a solid under every world.
+        let t_ground = if ray.dir.z < 0.0 {
+            (-ray.origin.z / ray.dir.z).max(0.0)
+        } else {
+            f64::INFINITY
+        };
+        let reach = leg.t_max.min(t_ground);
+        let materials = world.materials();
+        let mut intervals =
+            world.ordered_intervals(&ray, reach, Some(Band::Radar), &mut self.query);
+        let active = &mut self.active;
+        active.clear();
+        let mut loss = leg.loss_db;
+        let mut t = 0.0;
+        let mut first_cos = None;
+        let emit = |out: &mut Vec<Echo>, e: Echo| {
+            if e.power_db >= floor {
+                out.push(e);
+            }
+        };
+        loop {
+            let (exit_slot, t_exit) = active
+                .iter()
+                .enumerate()
+                .map(|(i, a)| (i, a.0))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((usize::MAX, f64::INFINITY));
+            let alpha: f64 = active.iter().map(|a| a.1).sum();
+            let eta: f64 = active.iter().map(|a| a.2).sum();
+            // Where the two-way loss reaches the dynamic range: nothing beyond matters.
+            let horizon = if alpha > 0.0 {
+                t + ((model.dynamic_range_db / 2.0 - loss) / alpha).max(0.0)
+            } else {
+                f64::INFINITY
+            };
+            let entry = intervals.peek(t_exit.min(reach).min(horizon));
+            let t_entry = entry.map_or(f64::INFINITY, |iv| iv.t_in.max(0.0));
+            let t_next = t_entry.min(t_exit).min(reach);
+            let t_end = t_next.min(horizon);
+            if eta > 0.0 && t_end > t {
+                let scatterer = active
+                    .iter()
+                    .max_by(|a, b| a.2.total_cmp(&b.2))
+                    .map(|a| a.3);
+                if let Some(material) = scatterer {
+                    volume_echoes((t, t_end), (loss, alpha, eta), leg, material, model, |e| {
+                        emit(out, e)
+                    });
+                }
+            }
+            if alpha > 0.0 {
+                loss += alpha * (t_end - t);
+            }
+            if t_end < t_next || 2.0 * loss >= model.dynamic_range_db {
+                return first_cos;
+            }
+            t = t_next;
+            if t >= reach {
+                if t_ground <= leg.t_max && t >= t_ground {
+                    let (cos, _) = surface_echo(
+                        leg,
+                        DVec3::Z,
+                        t,
+                        loss,
+                        materials.get(world.ground_material()),
+                        world.ground_material(),
+                        model,
+                        &mut |e| emit(out, e),
+                    );
+                    return first_cos.or(Some(cos));
+                }
+                return first_cos;
+            }
+            match entry {
+                Some(iv) if t_entry <= t_exit => {
+                    intervals.pop();
+                    let m = materials.get(iv.material);
+                    let a = m.attenuation_db_per_m(Band::Radar);
+                    if iv.t_in > 0.0 {
+                        let p = ray.at(t);
+                        let normal = world.objects()[iv.object as usize].shape.normal_at(p);
+                        let (cos, bounce) =
+                            surface_echo(leg, normal, t, loss, m, iv.material, model, &mut |e| {
+                                emit(out, e)
+                            });
+                        first_cos.get_or_insert(cos);
+                        if let Some(b) = bounce {
+                            self.legs.push(b);
+                        }
+                        if m.radar_reflectivity > 0.0 && m.radar_reflectivity < 1.0 {
+                            loss += -to_db(1.0 - m.radar_reflectivity);
+                        }
+                        if m.radar_reflectivity >= 1.0 {
+                            return first_cos; // all reflected: nothing goes in
+                        }
+                    }
+                    if a.is_infinite() {
+                        return first_cos;
+                    }
+                    if a > 0.0 || m.radar_backscatter_per_m > 0.0 {
+                        active.push((iv.t_out, a, m.radar_backscatter_per_m, iv.material));
+                    }
+                }
+                _ => {
+                    active.swap_remove(exit_slot);
+                }
+            }
+        }
+    }
+}
+
+/// The surface echo where `leg` enters material `m` at distance `t` (outward normal
+/// `normal`, one-way loss so far `loss`), and the mirrored leg of a specular surface. Returns
+/// the incidence cosine and that leg.
+#[allow(clippy::too_many_arguments)]
+fn surface_echo(
+    leg: &Leg,
+    normal: DVec3,
+    t: f64,
+    loss: f64,
+    m: &crate::world::Material,
+    material: MaterialId,
+    model: &EchoModel,
+    emit: &mut impl FnMut(Echo),
+) -> (f64, Option<Leg>) {
+    let d = leg.ray.dir;
+    let cos = d.dot(normal).abs().min(1.0);
+    let rho = m.radar_reflectivity;
+    if rho <= 0.0 {
+        return (cos, None);
+    }
+    let gain = if m.specular {
+        let theta = cos.acos();
+        let x = theta / m.specular_lobe;
+        (-4.0 * std::f64::consts::LN_2 * x * x).exp()
+    } else {
+        cos
+    };
+    let range = leg.path + t;
+    if gain > 0.0 {
+        emit(Echo {
+            range,
+            depth: 0.0,
+            decay_db_per_m: 0.0,
+            power_db: to_db(rho * gain) - 2.0 * loss + model.range_law.gain_db(range),
+            material,
+            kind: EchoKind::Surface,
+            bounces: leg.bounces,
+        });
+    }
+    let bounce = (m.specular && leg.bounces < model.max_bounces && leg.t_max > t).then(|| {
+        // Mirrored about the surface, facing away from it.
+        let n = if d.dot(normal) < 0.0 { normal } else { -normal };
+        let dir = d - 2.0 * d.dot(n) * n;
+        Leg {
+            ray: Ray {
+                origin: leg.ray.at(t) + n * 1e-6,
+                dir,
+            },
+            path: range,
+            loss_db: loss - to_db(rho),
+            bounces: leg.bounces + 1,
+            t_max: leg.t_max - t,
+        }
+    });
+    (
+        cos,
+        bounce.filter(|b| 2.0 * b.loss_db < model.dynamic_range_db),
+    )
+}
+
+/// The volume echoes of the stretch `[t0, t1]` of `leg` inside scatterers of total η
+/// (`eta`, 1/m) and attenuation `alpha` (dB/m), entered with one-way loss `loss`: the power
+/// η ∫ 10^(−2(loss + α s)/10) ds, in pieces of at most [`VOLUME_PIECE_M`], each under the range
+/// law at its middle.
+fn volume_echoes(
+    (t0, t1): (f64, f64),
+    (loss, alpha, eta): (f64, f64, f64),
+    leg: &Leg,
+    material: MaterialId,
+    model: &EchoModel,
+    mut emit: impl FnMut(Echo),
+) {
+    let pieces = ((t1 - t0) / VOLUME_PIECE_M).ceil().max(1.0);
+    let step = (t1 - t0) / pieces;
+    // Two-way decay constant of the power, 1/m.
+    let k = 2.0 * alpha * LN_10 / 10.0;
+    for i in 0..pieces as usize {
+        let a = t0 + step * i as f64;
+        let entry_loss = loss + alpha * (a - t0);
+        let integral = if k > 0.0 {
+            -(-k * step).exp_m1() / k
+        } else {
+            step
+        };
+        let mid = leg.path + a + step / 2.0;
+        emit(Echo {
+            range: leg.path + a,
+            depth: step,
+            decay_db_per_m: 2.0 * alpha,
+            power_db: to_db(eta * integral) - 2.0 * entry_loss + model.range_law.gain_db(mid),
+            material,
+            kind: EchoKind::Volume,
+            bounces: leg.bounces,
+        });
+    }
+}
+
+/// The linear power of an echo.
+pub fn power_linear(e: &Echo) -> f64 {
+    from_db(e.power_db)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::{MaterialTable, Object, Shape};
+
+    fn world(objects: &[(Shape, &str)]) -> World {
+        let materials = MaterialTable::default();
+        let objects = objects
+            .iter()
+            .map(|(shape, m)| Object {
+                name: None,
+                shape: shape.clone(),
+                material: materials.id(m).unwrap(),
+            })
+            .collect();
+        World::new(materials, objects)
+    }
+
+    fn wall_at(x: f64) -> Shape {
+        Shape::cuboid(
+            DVec3::new(x + 0.1, 0.0, 1.0),
+            DVec3::new(0.2, 40.0, 2.0),
+            0.0,
+        )
+        .unwrap()
+    }
+
+    fn model(law: RangeLaw) -> EchoModel {
+        EchoModel {
+            range_law: law,
+            dynamic_range_db: 200.0,
+            max_bounces: 2,
+        }
+    }
+
+    fn echoes_of(w: &World, ray: &Ray, m: &EchoModel) -> Vec<Echo> {
+        let mut out = Vec::new();
+        EchoTracer::default().echoes(w, ray, 1.0, 100.0, m, &mut out);
+        out
+    }
+
+    fn x_ray() -> Ray {
+        Ray::new(DVec3::new(0.0, 0.0, 1.0), DVec3::X)
+    }
+
+    #[test]
+    fn range_laws_give_exact_steps_for_double_range() {
+        for (law, step) in [
+            (RangeLaw::R2, 20.0 * 2f64.log10()),
+            (RangeLaw::R4, 40.0 * 2f64.log10()),
+            (RangeLaw::Flat, 0.0),
+        ] {
+            let near = echoes_of(&world(&[(wall_at(5.0), "concrete")]), &x_ray(), &model(law));
+            let far = echoes_of(
+                &world(&[(wall_at(10.0), "concrete")]),
+                &x_ray(),
+                &model(law),
+            );
+            assert_eq!((near.len(), far.len()), (1, 1));
+            assert!((near[0].range - 5.0).abs() < 1e-12 && (far[0].range - 10.0).abs() < 1e-12);
+            let diff = near[0].power_db - far[0].power_db;
+            assert!((diff - step).abs() < 1e-9, "{law:?}: {diff}");
+            // Normal incidence on concrete: ρ = 0.35 at 5 m.
+            let expect = 10.0 * 0.35f64.log10() + law.gain_db(5.0);
+            assert!((near[0].power_db - expect).abs() < 1e-9);
+        }
+        assert!((RangeLaw::R2.gain_db(2.0) + 6.0206).abs() < 1e-4);
+        assert!((RangeLaw::R4.gain_db(2.0) + 12.0412).abs() < 1e-4);
+    }
+
+    #[test]
+    fn foliage_slab_lowers_the_wall_echo_by_two_way_loss_and_entry() {
+        let slab =
+            Shape::cuboid(DVec3::new(4.0, 0.0, 1.0), DVec3::new(1.5, 40.0, 2.0), 0.0).unwrap();
+        let m = model(RangeLaw::Flat);
+        let bare = echoes_of(&world(&[(wall_at(10.0), "concrete")]), &x_ray(), &m);
+        let w = world(&[(slab, "foliage_dense"), (wall_at(10.0), "concrete")]);
+        let hidden = echoes_of(&w, &x_ray(), &m);
+        let wall = hidden
+            .iter()
+            .find(|e| e.kind == EchoKind::Surface && e.range > 9.0);
+        let wall = wall.expect("wall echo behind the slab");
+        // 1.5 m at 3 dB/m, two ways, plus the slab's entry: 10 log10(1 / (1 - 0.1)), two ways.
+        let expect = 2.0 * 3.0 * 1.5 + 2.0 * 10.0 * (1.0 / 0.9f64).log10();
+        assert!((bare[0].power_db - wall.power_db - expect).abs() < 1e-9);
+        // The slab: a surface echo at 3.25 m and a volume echo over its depth.
+        assert!((hidden[0].range - 3.25).abs() < 1e-12 && hidden[0].kind == EchoKind::Surface);
+        let vol = hidden[1];
+        assert_eq!(vol.kind, EchoKind::Volume);
+        assert!((vol.range - 3.25).abs() < 1e-12 && (vol.depth - 1.5).abs() < 1e-12);
+        // η ∫₀^1.5 10^(−2(L0 + 3 s)/10) ds, L0 the entry loss.
+        let l0 = 10.0 * (1.0 / 0.9f64).log10();
+        let k = 2.0 * 3.0 * LN_10 / 10.0;
+        let expect = 0.2 * (1.0 - (-k * 1.5).exp()) / k * 10f64.powf(-2.0 * l0 / 10.0);
+        assert!((power_linear(&vol) - expect).abs() < 1e-12);
+        // A slab deeper than the dynamic range hides the wall: 60 dB of range is used up by
+        // 10 m of dense foliage (60 dB two ways).
+        let deep =
+            Shape::cuboid(DVec3::new(6.0, 0.0, 1.0), DVec3::new(11.0, 40.0, 2.0), 0.0).unwrap();
+        let w = world(&[(deep, "foliage_dense"), (wall_at(13.0), "concrete")]);
+        let m60 = EchoModel {
+            dynamic_range_db: 60.0,
+            ..m
+        };
+        let e = echoes_of(&w, &x_ray(), &m60);
+        assert!(e.iter().all(|e| e.range < 13.0), "{e:?}");
+    }
+
+    #[test]
+    fn sphere_before_wall_gives_surface_volume_and_wall_echoes() {
+        let w = world(&[
+            (
+                Shape::sphere(DVec3::new(5.0, 0.0, 1.0), 1.0).unwrap(),
+                "foliage_light",
+            ),
+            (wall_at(10.0), "concrete"),
+        ]);
+        let e = echoes_of(&w, &x_ray(), &model(RangeLaw::R2));
+        let kinds: Vec<_> = e.iter().map(|e| (e.kind, e.range, e.depth)).collect();
+        assert_eq!(kinds.len(), 3, "{kinds:?}");
+        assert_eq!(kinds[0], (EchoKind::Surface, 4.0, 0.0));
+        assert_eq!(kinds[1].0, EchoKind::Volume);
+        assert!((kinds[1].1 - 4.0).abs() < 1e-12 && (kinds[1].2 - 2.0).abs() < 1e-12);
+        assert_eq!(kinds[2], (EchoKind::Surface, 10.0, 0.0));
+    }
+
+    #[test]
+    fn absorber_gives_no_echo_and_hides_what_is_behind() {
+        let w = world(&[
+            (
+                Shape::cuboid(DVec3::new(4.0, 0.0, 1.0), DVec3::new(0.5, 40.0, 2.0), 0.0).unwrap(),
+                "absorber",
+            ),
+            (wall_at(10.0), "concrete"),
+        ]);
+        assert!(echoes_of(&w, &x_ray(), &model(RangeLaw::R2)).is_empty());
+    }
+
+    #[test]
+    fn mirror_at_45_degrees_gives_a_ghost_at_the_unfolded_path() {
+        // A metal plate at x = 5 turned 45°: the ray goes on along +y to a wall at y = 6.
+        let mirror = Shape::cuboid(
+            DVec3::new(5.0, 0.0, 1.0),
+            DVec3::new(0.1, 3.0, 2.0),
+            -45f64.to_radians(),
+        )
+        .unwrap();
+        let wall =
+            Shape::cuboid(DVec3::new(5.0, 6.1, 1.0), DVec3::new(40.0, 0.2, 2.0), 0.0).unwrap();
+        let w = world(&[(mirror, "metal"), (wall, "concrete")]);
+        let e = echoes_of(&w, &x_ray(), &model(RangeLaw::R2));
+        let ghost = e.iter().find(|e| e.bounces == 1).expect("a ghost echo");
+        // The mirror's face is 0.05·√2 before its centre line along x.
+        let hit = 5.0 - 0.05 * 2f64.sqrt();
+        let unfolded = hit + (6.0 - 0.0);
+        assert!((ghost.range - unfolded).abs() < 1e-6, "{e:?}");
+        assert_eq!(ghost.material, w.materials().id("concrete").unwrap());
+        // At 45° a 10° lobe returns nothing above the floor directly.
+        assert!(e.iter().all(|e| e.bounces == 1), "{e:?}");
+    }
+}
