@@ -401,10 +401,15 @@ mod tests {
             .map(|k| {
                 let stamp = f64::from(k) * 0.25;
                 let mut tr = Tracer::default();
-                sensor.config.scan(&s.world, &pose, stamp, &mut rng, &mut tr)
+                sensor
+                    .config
+                    .scan(&s.world, &pose, stamp, &mut rng, &mut tr)
             })
             .collect();
-        assert!(scans[0].echoes.len() > scans[0].len(), "several echoes per ray");
+        assert!(
+            scans[0].echoes.len() > scans[0].len(),
+            "several echoes per ray"
+        );
         let mut w = ScanLogWriter::new(Vec::new(), &header).unwrap();
         for scan in &scans {
             w.write(scan).unwrap();
@@ -416,8 +421,14 @@ mod tests {
             assert_eq!(a.ranges, b.ranges);
             assert_eq!(a.echo_start, b.echo_start);
             for (x, y) in a.echoes.iter().zip(&b.echoes) {
-                assert_eq!((x.range as f32, x.power_db as f32), (y.range as f32, y.power_db as f32));
-                assert_eq!((x.material, x.kind, x.bounces), (y.material, y.kind, y.bounces));
+                assert_eq!(
+                    (x.range as f32, x.power_db as f32),
+                    (y.range as f32, y.power_db as f32)
+                );
+                assert_eq!(
+                    (x.material, x.kind, x.bounces),
+                    (y.material, y.kind, y.bounces)
+                );
             }
         }
     }
