@@ -38,8 +38,6 @@ checked_f64! {
     Backscatter: |v| (0.0..=10.0).contains(&v), "a number from 0 to 10 (1/m)";
     /// A lobe width in degrees.
     LobeDeg: |v| (0.1..=90.0).contains(&v), "a number from 0.1 to 90 (degrees)";
-    /// An extinction coefficient, 1/m.
-    Extinction: |v| (0.0..=100.0).contains(&v), "a number from 0 to 100 (1/m)";
 }
 
 /// A point `[x, y]` (resting on the ground) or `[x, y, z]`.
@@ -223,8 +221,6 @@ pub struct MaterialSpec {
     pub radar_backscatter_per_m: Option<Backscatter>,
     /// Full width of a specular echo lobe, degrees (0.1–90).
     pub specular_lobe_deg: Option<LobeDeg>,
-    /// Laser aerosol extinction k, 1/m (0–100).
-    pub laser_extinction_per_m: Option<Extinction>,
     /// Stops a laser at its surface.
     pub laser_opaque: Option<bool>,
     /// Laser dB/m when not opaque.

@@ -17,21 +17,21 @@
 //!
 //! The echo model (DESIGN §7.2) adds, per material, a reflectivity ρ (power fraction returned
 //! at entry, normal incidence), a volume backscatter coefficient η (power fraction scattered
-//! back per metre inside), the width of a specular material's lobe, and, for the laser in
-//! aerosols (§7.6), an extinction coefficient k. The thesis model uses none of them.
+//! back per metre inside), and the width of a specular material's lobe. The thesis model uses
+//! none of them. (The laser's returns from aerosol particles, §7.6, are not modelled yet.)
 //!
-//! | material | ρ | η (1/m) | specular lobe | laser k (1/m) | source |
-//! |---|---|---|---|---|---|
-//! | `concrete` | 0.35 | 0 | diffuse | 0 | rough value of 60–77 GHz reflection measurements of concrete walls (|Γ|² ≈ 0.3–0.4) |
-//! | `metal` | 1.0 | 0 | 10° | 0 | a conductor reflects all; the lobe width is chosen |
-//! | `wood` | 0.2 | 0 | diffuse | 0 | rough value of mm-wave measurements of wooden boards |
-//! | `glass` | 0.25 | 0 | 10° | 0 | ≈ 25 % power reflection of a pane at 60–77 GHz; lobe chosen |
-//! | `foliage_light` | 0.1 | 0.1 | diffuse | 0 | ρ chosen (leaves are a weak, diffuse surface); η chosen so that a metre of hedge glows about as bright as its surface |
-//! | `foliage_dense` | 0.1 | 0.2 | diffuse | 0 | chosen as above, twice the scatterers |
-//! | `smoke` | 0 | 0 | diffuse | 0 | no mm-wave echo; laser k is 0 so that the thesis' opaque smoke stays as it was; set `laser_extinction_per_m` (e.g. 0.5: a laser sees about 2 m in) with `laser_opaque = false` for scattered returns |
-//! | `dust` | 0 | 1e-4 | diffuse | 0 | η chosen (a faint haze); laser as for smoke |
-//! | `absorber` | 0 | 0 | diffuse | 0 | by definition: no echo, nothing behind |
-//! | `ground` | 0.15 | 0 | diffuse | 0 | chosen: a grazing ground echo is weak |
+//! | material | ρ | η (1/m) | specular lobe | source |
+//! |---|---|---|---|---|
+//! | `concrete` | 0.35 | 0 | diffuse | rough value of 60–77 GHz reflection measurements of concrete walls (power reflection ≈ 0.3–0.4) |
+//! | `metal` | 1.0 | 0 | 10° | a conductor reflects all; the lobe width is chosen |
+//! | `wood` | 0.2 | 0 | diffuse | rough value of mm-wave measurements of wooden boards |
+//! | `glass` | 0.25 | 0 | 10° | ≈ 25 % power reflection of a pane at 60–77 GHz; lobe chosen |
+//! | `foliage_light` | 0.1 | 0.1 | diffuse | ρ chosen (leaves are a weak, diffuse surface); η chosen so that a metre of hedge glows about as bright as its surface |
+//! | `foliage_dense` | 0.1 | 0.2 | diffuse | chosen as above, twice the scatterers |
+//! | `smoke` | 0 | 0 | diffuse | no mm-wave echo |
+//! | `dust` | 0 | 1e-4 | diffuse | η chosen (a faint haze) |
+//! | `absorber` | 0 | 0 | diffuse | by definition: no echo, nothing behind |
+//! | `ground` | 0.15 | 0 | diffuse | chosen: a grazing ground echo is weak |
 //!
 //! "Chosen" marks figures with no published source: they only set how bright an echo is
 //! relative to the others, and every one can be overridden in a scenario's `[[material]]`.
@@ -73,9 +73,6 @@ pub struct Material {
     pub laser_opaque: bool,
     /// Laser loss inside when not opaque, dB/m.
     pub laser_attenuation_db_per_m: f64,
-    /// Aerosol extinction k, 1/m: a laser ray inside returns from the particles at depth d
-    /// with probability 1 − exp(−k·d) (DESIGN §7.6); 0 = no particle returns.
-    pub laser_extinction_per_m: f64,
     /// Whether a robot may drive through it.
     pub traversable: bool,
     /// Colour in figures, RGB.
@@ -118,7 +115,6 @@ fn builtin(
         specular_lobe: DEFAULT_SPECULAR_LOBE_DEG.to_radians(),
         laser_opaque: laser.is_none(),
         laser_attenuation_db_per_m: laser.unwrap_or(f64::INFINITY),
-        laser_extinction_per_m: 0.0,
         traversable,
         color,
     }
