@@ -397,20 +397,9 @@ pub fn power_linear(e: &Echo) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::{MaterialTable, Object, Shape};
+    use crate::world::Shape;
 
-    fn world(objects: &[(Shape, &str)]) -> World {
-        let materials = MaterialTable::default();
-        let objects = objects
-            .iter()
-            .map(|(shape, m)| Object {
-                name: None,
-                shape: shape.clone(),
-                material: materials.id(m).unwrap(),
-            })
-            .collect();
-        World::new(materials, objects)
-    }
+    use crate::world::strategies::world_of as world;
 
     fn wall_at(x: f64) -> Shape {
         Shape::cuboid(

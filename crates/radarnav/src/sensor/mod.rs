@@ -250,6 +250,29 @@ impl SensorConfig {
         ScanDraws(rays, select)
     }
 
+    /// A scan of this sensor at `pose` and `stamp` with room for its rays and none filled in.
+    fn empty_scan(&self, pose: &Pose, stamp: f64) -> Scan {
+        let n = self.azimuth_count() * self.elevations.len();
+        Scan {
+            stamp,
+            kind: self.kind,
+            pose: *pose,
+            angle_min: self.angle_min(),
+            angle_increment: self.resolution,
+            azimuths: self.azimuth_count(),
+            elevations: self.elevations.clone(),
+            range_min: self.range_min,
+            range_max: self.range_max,
+            side_beam_offset: self.side_offset(),
+            ranges: Vec::with_capacity(n),
+            hits: Vec::with_capacity(n),
+            materials: Vec::with_capacity(n),
+            beams: Vec::with_capacity(n),
+            echoes: Vec::new(),
+            echo_start: Vec::new(),
+        }
+    }
+
     /// The side-beam offset in use (0 for ground truth).
     fn side_offset(&self) -> f64 {
         if self.has_side_beams() {
@@ -280,32 +303,11 @@ impl SensorConfig {
         let band = self.kind.band();
         let side_beams = self.has_side_beams();
         if self.signal.return_mode != ReturnMode::Thesis {
-            return self.trace_echo_scan(world, pose, stamp, draws, parallel_min);
+            return self.trace_echo_scan(world, pose, stamp, draws, tracer, parallel_min);
         }
         let draws = &draws.0;
         assert_eq!(draws.len(), n, "draws of another sensor");
-        let mut out = Scan {
-            stamp,
-            kind: self.kind,
-            pose: *pose,
-            angle_min: self.angle_min(),
-            angle_increment: self.resolution,
-            azimuths,
-            elevations: self.elevations.clone(),
-            range_min: self.range_min,
-            range_max: self.range_max,
-            side_beam_offset: if side_beams {
-                self.side_beam_offset
-            } else {
-                0.0
-            },
-            ranges: Vec::with_capacity(n),
-            hits: Vec::with_capacity(n),
-            materials: Vec::with_capacity(n),
-            beams: Vec::with_capacity(n),
-            echoes: Vec::new(),
-            echo_start: Vec::new(),
-        };
+        let mut out = self.empty_scan(pose, stamp);
         let plane_sin_cos: Vec<(f64, f64)> = self.elevations.iter().map(|e| e.sin_cos()).collect();
         // Rays that all leave the sensor's origin share one set of candidate lists, unless
         // the world has so much in range that building them costs more than walking the grid.

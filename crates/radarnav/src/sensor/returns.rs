@@ -30,6 +30,7 @@ impl SensorConfig {
         pose: &Pose,
         stamp: f64,
         draws: &ScanDraws,
+        tracer: &mut Tracer,
         parallel_min: usize,
     ) -> Scan {
         let azimuths = self.azimuth_count();
@@ -50,28 +51,10 @@ impl SensorConfig {
                 .map(|i| with_pool_tracer(|t| answer(t, i)))
                 .collect()
         } else {
-            let mut tracer = Tracer::default();
-            (0..n).map(|i| answer(&mut tracer, i)).collect()
+            (0..n).map(|i| answer(tracer, i)).collect()
         };
         let all = self.signal.return_mode == ReturnMode::All;
-        let mut out = Scan {
-            stamp,
-            kind: self.kind,
-            pose: *pose,
-            angle_min,
-            angle_increment: self.resolution,
-            azimuths,
-            elevations: self.elevations.clone(),
-            range_min: self.range_min,
-            range_max: self.range_max,
-            side_beam_offset: self.side_offset(),
-            ranges: Vec::with_capacity(n),
-            hits: Vec::with_capacity(n),
-            materials: Vec::with_capacity(n),
-            beams: Vec::with_capacity(n),
-            echoes: Vec::new(),
-            echo_start: Vec::new(),
-        };
+        let mut out = self.empty_scan(pose, stamp);
         for (a, (_, noise)) in answers.into_iter().zip(&draws.0) {
             out.ranges.push(self.reported_range(a.range, *noise) as f32);
             out.hits.push(a.kind);

@@ -206,22 +206,11 @@ fn walk(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::{MaterialTable, Object, Shape, SortedIntervals};
+    use crate::world::{MaterialTable, Shape, SortedIntervals};
     use glam::DVec3;
     use proptest::prelude::{Just, prop_oneof};
 
-    fn world(objects: &[(Shape, &str)]) -> World {
-        let materials = MaterialTable::default();
-        let objects = objects
-            .iter()
-            .map(|(shape, m)| Object {
-                name: None,
-                shape: shape.clone(),
-                material: materials.id(m).unwrap(),
-            })
-            .collect();
-        World::new(materials, objects)
-    }
+    use crate::world::strategies::world_of as world;
 
     fn x_ray(y: f64) -> Ray {
         Ray::new(DVec3::new(0.0, y, 1.0), DVec3::X)

@@ -582,6 +582,20 @@ pub(crate) mod strategies {
     use glam::DVec2;
     use proptest::prelude::*;
 
+    /// A world of built-in materials from (shape, material name) pairs.
+    pub(crate) fn world_of(objects: &[(Shape, &str)]) -> World {
+        let materials = MaterialTable::default();
+        let objects = objects
+            .iter()
+            .map(|(shape, m)| Object {
+                name: None,
+                shape: shape.clone(),
+                material: materials.id(m).expect("a built-in material"),
+            })
+            .collect();
+        World::new(materials, objects)
+    }
+
     /// Any of the five shapes, in an area of 16 × 16 m.
     pub(crate) fn arb_shape() -> impl Strategy<Value = Shape> {
         let c = (-8.0..8.0f64, -8.0..8.0f64, 0.0..3.0f64);
