@@ -14,8 +14,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use radarnav::demo::{result_figure, share_past_foliage, thesis_experiment};
 use radarnav::render::{Figure, save_png};
-use radarnav::scenario::{BUILTIN_SCENARIOS, MountedSensor};
-use radarnav::sensor::{PRESETS, Tracer, preset};
+use radarnav::scenario::BUILTIN_SCENARIOS;
+use radarnav::sensor::{PRESETS, Tracer};
 use radarnav::{Pose, Scan, Scenario};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -129,6 +129,11 @@ enum Command {
         /// A ray with no return frees map cells up to this range, metres.
         #[arg(long, default_value_t = 10.0)]
         map_max_free_range: f64,
+        /// Sensor presets to add to the robot, comma-separated, each named after its preset
+        /// and mounted like the robot's first sensor (e.g. `navtech_cts350x`: its power
+        /// images go to radar/<sensor>/).
+        #[arg(long, value_delimiter = ',')]
+        add_sensor: Vec<String>,
     },
     /// Compare exploration strategies with each sensor over several seeds (in parallel):
     /// writes compare.csv (coverage against distance), compare_runs.csv and compare.png.
@@ -300,6 +305,7 @@ fn run(cli: Cli) -> Result<()> {
             map_pose,
             map_resolution,
             map_max_free_range,
+            add_sensor,
         } => {
             let s = load(&scenario)?;
             let base = Path::new(&scenario)
@@ -320,6 +326,7 @@ fn run(cli: Cli) -> Result<()> {
                 map_pose: &map_pose,
                 map_resolution,
                 map_max_free_range,
+                add_sensors: &add_sensor,
             })
         }
         Command::Compare {
@@ -619,25 +626,14 @@ fn scan(
     })?;
     let mounted = match r.sensor(sensor) {
         Some(m) => m.clone(),
-        None => {
-            let config = preset(sensor).with_context(|| {
-                let on_robot: Vec<&str> = r.sensors.iter().map(|m| m.name.as_str()).collect();
-                format!(
-                    "`{sensor}` is neither a sensor of robot `{}` ({}) nor a preset (see `radarnav presets`)",
-                    r.name,
-                    on_robot.join(", ")
-                )
-            })?;
-            let mount = r
-                .sensors
-                .first()
-                .map_or(Pose::new(0.0, 0.0, 0.4, 0.0), |m| m.mount);
-            MountedSensor {
-                name: sensor.to_owned(),
-                config,
-                mount,
-            }
-        }
+        None => r.with_preset_mount(sensor).with_context(|| {
+            let on_robot: Vec<&str> = r.sensors.iter().map(|m| m.name.as_str()).collect();
+            format!(
+                "`{sensor}` is neither a sensor of robot `{}` ({}) nor a preset (see `radarnav presets`)",
+                r.name,
+                on_robot.join(", ")
+            )
+        })?,
     };
     let robot_pose = pose.map(parse_pose).transpose()?.unwrap_or(r.start);
     let sensor_pose = robot_pose.compose(&mounted.mount);

@@ -158,6 +158,26 @@ pub struct RunArgs<'a> {
     pub map_pose: &'a str,
     pub map_resolution: f64,
     pub map_max_free_range: f64,
+    /// Presets to mount on the robot besides its own sensors.
+    pub add_sensors: &'a [String],
+}
+
+/// `robot` with the presets `names` added (see [`Robot::with_preset_mount`]).
+fn with_sensors(robot: &Robot, names: &[String]) -> Result<Robot> {
+    let mut r = robot.clone();
+    for name in names {
+        if r.sensor(name).is_some() {
+            bail!(
+                "--add-sensor `{name}`: robot `{}` already has a sensor of that name",
+                r.name
+            );
+        }
+        let s = robot.with_preset_mount(name).with_context(|| {
+            format!("--add-sensor `{name}` is not a preset (see `radarnav presets`)")
+        })?;
+        r.sensors.push(s);
+    }
+    Ok(r)
 }
 
 /// The mappers `run` builds.
@@ -215,24 +235,27 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
     let s = a.scenario;
     let settings = settings(s, a.seed, a.duration)?;
     let plan = plan(s, a.robot, a.teleop, a.base, false, settings.seed)?;
-    let mut maps = mappers(a, plan.robot)?;
+    let robot = with_sensors(plan.robot, a.add_sensors)?;
+    let mut maps = mappers(a, &robot)?;
     if plan.mission == "explore" {
         track_coverage(
             &s.world,
-            plan.robot.vehicle,
-            &plan.robot.start,
+            robot.vehicle,
+            &robot.start,
             &mut maps,
             radarnav::compare::COVERAGE_PERIOD,
         );
     }
-    let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
+    let mut sim = Simulation::new(&s.world, &robot, plan.controller, settings)?;
     let options = RecordOptions {
         mcap: a.mcap,
         ..RecordOptions::default()
     };
-    let mut rec = Recorder::create(a.out, &s.world, plan.robot, options)?.with_maps(maps)?;
+    let mut rec = Recorder::create(a.out, &s.world, &robot, options)?
+        .with_maps(maps)?
+        .with_radar_images(&s.world, &robot, settings.seed)?;
     let (summary, wall) = drive(&mut sim, settings.dt, &mut rec)?;
-    let recorded = rec.finish(s, plan.robot, &summary, a.pixels)?;
+    let recorded = rec.finish(s, &robot, &summary, a.pixels)?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,

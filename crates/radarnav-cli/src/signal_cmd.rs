@@ -14,13 +14,6 @@ use radarnav::sensor::image::{IMAGE_EPOCH_US, power_image, write_grey_png};
 use radarnav::{Pose, Scan, Scenario};
 use rand_chacha::ChaCha8Rng;
 
-/// CA-CFAR of the detections file: 16 training and 4 guard cells a side, P_fa = 1e-3.
-const CFAR: Detector = Detector::CaCfar {
-    train: 16,
-    guard: 4,
-    p_fa: 1e-3,
-};
-
 /// Pixels across the Cartesian view.
 const CART_PIXELS: usize = 801;
 
@@ -110,7 +103,10 @@ pub fn write_signal_outputs(
     )?;
     write_atomic(&out.join("cartesian.png"), &cart)?;
     let mut csv = String::from("detector,row,azimuth_deg,bin,range_m,power\n");
-    for (name, d) in [("ca_cfar", CFAR), ("k_strongest", Detector::K_STRONGEST)] {
+    for (name, d) in [
+        ("ca_cfar", Detector::CA_CFAR),
+        ("k_strongest", Detector::K_STRONGEST),
+    ] {
         for det in detect(&img, d, im.display_range_db) {
             writeln!(
                 csv,

@@ -221,3 +221,104 @@ fn truncated_scan_log_is_an_error_not_a_panic() {
         "not a radarnav scan log (bad magic or version)"
     );
 }
+
+/// A run with an imaging radar and a multi-echo radar added: images on disk in the Oxford
+/// layout, one per finished rotation, and images, detections and echoes in the MCAP.
+#[test]
+fn imaging_and_multi_echo_radars_are_recorded() {
+    use foxglove::schemas::{CompressedImage, PointCloud};
+    use radarnav::sensor::ReturnMode;
+    use radarnav::sensor::image::{IMAGE_EPOCH_US, PowerImage};
+
+    let dir = tmp("record-images");
+    let s = Scenario::builtin("foliage-wall").unwrap();
+    let mut robot = s.robots[0].clone();
+    robot
+        .sensors
+        .push(robot.with_preset_mount("navtech_cts350x").unwrap());
+    let mut echo = robot.with_preset_mount("radar_thesis").unwrap();
+    echo.name = "echo".into();
+    echo.config.signal.return_mode = ReturnMode::All;
+    robot.sensors.push(echo);
+    let controller = s.mission.as_ref().unwrap().controller(0).unwrap();
+    let settings = RunSettings {
+        duration: 1.0,
+        ..RunSettings::of(&s)
+    };
+    let mut sim = Simulation::new(&s.world, &robot, controller, settings).unwrap();
+    let mut rec = Recorder::create(&dir, &s.world, &robot, RecordOptions::default())
+        .unwrap()
+        .with_radar_images(&s.world, &robot, settings.seed)
+        .unwrap();
+    let summary = sim.run(&mut rec).unwrap();
+    rec.finish(&s, &robot, &summary, 300).unwrap();
+
+    // Rotations start at 0, 0.25, 0.5 and 0.75 s; the last ends with the run and is dropped.
+    let idir = dir.join(files::RADAR).join("navtech_cts350x");
+    let index = std::fs::read_to_string(idir.join(files::RADAR_TIMESTAMPS)).unwrap();
+    let stamps: Vec<i64> = index
+        .lines()
+        .map(|l| l.split(' ').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(
+        stamps,
+        [0, 250_000, 500_000].map(|us| IMAGE_EPOCH_US + us).to_vec()
+    );
+    for t in &stamps {
+        let png = std::fs::read(idir.join(format!("{t}.png"))).unwrap();
+        let img = PowerImage::read_png(&png, 0.0438, 5600).unwrap();
+        assert_eq!((img.rows(), img.bins), (400, 3768));
+        assert_eq!(img.timestamps_us[0], *t);
+    }
+    let detections = std::fs::read_to_string(idir.join(files::RADAR_DETECTIONS)).unwrap();
+    assert!(detections.lines().count() > 100);
+
+    let bytes = std::fs::read(dir.join(files::MCAP)).unwrap();
+    let mut images = 0;
+    let mut points = 0;
+    let mut echo_clouds = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        match m.channel.topic.as_str() {
+            "/p3at/radar/navtech_cts350x/image" => {
+                let img = CompressedImage::decode(m.data.as_ref()).unwrap();
+                assert_eq!(img.format, "png");
+                assert_eq!(img.frame_id, "p3at/navtech_cts350x");
+                assert_eq!(
+                    img.data.as_ref(),
+                    std::fs::read(idir.join(format!("{}.png", stamps[images])))
+                        .unwrap()
+                        .as_slice()
+                );
+                images += 1;
+            }
+            "/p3at/radar/navtech_cts350x/points" => {
+                let cloud = PointCloud::decode(m.data.as_ref()).unwrap();
+                assert_eq!(cloud.point_stride, 13);
+                assert!(!cloud.data.is_empty());
+                // Detections lie inside the room (x in 0..12, y in 0..8, walls 0.2 m), but for
+                // the ghosts of specular bounces (the metal pole), placed beyond the walls.
+                let inside = cloud
+                    .data
+                    .chunks_exact(13)
+                    .filter(|p| {
+                        let f = |k: usize| f32::from_le_bytes(p[k..k + 4].try_into().unwrap());
+                        (-0.5..12.5).contains(&f(0)) && (-0.5..8.5).contains(&f(4))
+                    })
+                    .count();
+                assert!(inside as f64 > 0.95 * (cloud.data.len() / 13) as f64);
+                points += 1;
+            }
+            "/p3at/echoes/echo" => {
+                let cloud = PointCloud::decode(m.data.as_ref()).unwrap();
+                assert_eq!(cloud.point_stride, 18);
+                assert!(cloud.data.len() >= 360 * 18);
+                echo_clouds += 1;
+            }
+            "/p3at/echoes/radar" => panic!("a thesis-mode radar has no echo channel"),
+            _ => {}
+        }
+    }
+    assert_eq!((images, points), (3, 3));
+    assert_eq!(echo_clouds, 4);
+}

@@ -11,6 +11,15 @@
 //!   sensor's exact pose at the scan's time (scans inside a step are taken on the arc);
 //!   intensities code how each ray ended: 0 no return, 1 budget ran out, 2 solid. A sensor with
 //!   several planes logs the one closest to horizontal.
+//! * `/<robot>/echoes/<sensor>` (`foxglove.PointCloud`, every scan of a sensor with a
+//!   multi-echo return mode): every echo of the scan in the frame `world`, fields `x`, `y`,
+//!   `z`, `power_db` (float32), `kind` (0 surface, 1 volume) and `bounces` (uint8).
+//! * `/<robot>/radar/<sensor>/image` (`foxglove.CompressedImage`, PNG, every rotation of an
+//!   imaging radar, stamped at its first row): the polar power image in the Oxford layout,
+//!   frame `<robot>/<sensor>`.
+//! * `/<robot>/radar/<sensor>/points` (`foxglove.PointCloud`, with each image): its
+//!   k-strongest detections in the frame `world` (each from the pose of its own row), fields
+//!   `x`, `y`, `z` (float32) and `power` (uint8, the image's value).
 //! * `/<robot>/path` (`foxglove.PosesInFrame`, once at the end): the driven path.
 //! * `/<robot>/map/<name>` (`foxglove.Grid`, frame `world`, every [`super::GRID_PERIOD`] s and
 //!   at the end): each occupancy map, cropped to its known cells. Fields `red`, `green`,
@@ -22,19 +31,20 @@ use std::io::{Seek, Write};
 
 use foxglove::Encode;
 use foxglove::schemas::{
-    Color, CubePrimitive, CylinderPrimitive, FrameTransform, Grid as FgGrid, LaserScan,
-    LinePrimitive, PackedElementField, Point3, Pose as FgPose, PoseInFrame, PosesInFrame,
-    Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, Vector2, Vector3,
-    line_primitive, packed_element_field::NumericType,
+    Color, CompressedImage, CubePrimitive, CylinderPrimitive, FrameTransform, Grid as FgGrid,
+    LaserScan, LinePrimitive, PackedElementField, Point3, PointCloud, Pose as FgPose, PoseInFrame,
+    PosesInFrame, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, Vector2,
+    Vector3, line_primitive, packed_element_field::NumericType,
 };
 
 use super::RecordError;
+use super::radar_images::SweepImage;
 use crate::map::CellClass;
 use crate::map::Grid;
 use crate::map::export::known_extent;
 use crate::pose::Pose;
 use crate::scenario::Robot;
-use crate::sensor::{HitKind, Scan};
+use crate::sensor::{EchoKind, HitKind, ReturnMode, Scan};
 use crate::sim::Step;
 use crate::world::{Shape, World};
 
@@ -51,6 +61,11 @@ pub struct McapLog<W: Write + Seek> {
     pose: u16,
     odometry: u16,
     scans: Vec<(u16, usize)>,
+    /// Per sensor, the echo channel of a multi-echo sensor.
+    echoes: Vec<Option<u16>>,
+    /// Per sensor, the image and detection channels of an imaging radar.
+    radar: Vec<Option<(u16, u16)>>,
+    sensor_names: Vec<String>,
     path: u16,
     maps: Vec<u16>,
     sequence: u32,
@@ -99,6 +114,17 @@ fn color(rgb: [u8; 3], a: f64) -> Option<Color> {
     })
 }
 
+/// Bytes per point of the echo clouds.
+const ECHO_STRIDE: u32 = 18;
+
+fn field(name: &str, offset: u32, kind: NumericType) -> PackedElementField {
+    PackedElementField {
+        name: name.into(),
+        offset,
+        r#type: kind as i32,
+    }
+}
+
 fn mcap_err(e: impl std::fmt::Display) -> RecordError {
     RecordError::Mcap(e.to_string())
 }
@@ -126,8 +152,28 @@ impl<W: Write + Seek> McapLog<W> {
         let pose = channel(&format!("/{name}/pose"), PoseInFrame::get_schema())?;
         let odometry = channel(&format!("/{name}/odometry"), PoseInFrame::get_schema())?;
         let mut scans = Vec::new();
+        let mut echoes = Vec::new();
+        let mut radar = Vec::new();
         for s in &robot.sensors {
             let id = channel(&format!("/{name}/scan/{}", s.name), LaserScan::get_schema())?;
+            let signal = &s.config.signal;
+            echoes.push(if signal.return_mode == ReturnMode::Thesis {
+                None
+            } else {
+                Some(channel(
+                    &format!("/{name}/echoes/{}", s.name),
+                    PointCloud::get_schema(),
+                )?)
+            });
+            radar.push(if signal.image.is_some() && s.config.range_bin.is_some() {
+                let prefix = format!("/{name}/radar/{}", s.name);
+                Some((
+                    channel(&format!("{prefix}/image"), CompressedImage::get_schema())?,
+                    channel(&format!("{prefix}/points"), PointCloud::get_schema())?,
+                ))
+            } else {
+                None
+            });
             let plane = s
                 .config
                 .elevations
@@ -145,6 +191,9 @@ impl<W: Write + Seek> McapLog<W> {
             pose,
             odometry,
             scans,
+            echoes,
+            radar,
+            sensor_names: robot.sensors.iter().map(|s| s.name.clone()).collect(),
             path,
             maps: Vec::new(),
             sequence: 0,
@@ -228,7 +277,81 @@ impl<W: Write + Seek> McapLog<W> {
                 })
                 .collect(),
         };
+        self.write(ch, scan.stamp, &msg)?;
+        let Some(ch) = self.echoes.get(sensor).copied().flatten() else {
+            return Ok(());
+        };
+        let mut data = Vec::with_capacity(scan.echoes.len() * ECHO_STRIDE as usize);
+        for i in 0..scan.len() {
+            let (az, el) = scan.angles(i);
+            let ray = crate::sensor::beam_ray(&scan.pose, az, el.sin_cos(), 0.0);
+            for e in scan.echoes_of(i) {
+                let p = ray.at(e.range);
+                for v in [p.x, p.y, p.z, e.power_db] {
+                    data.extend_from_slice(&(v as f32).to_le_bytes());
+                }
+                data.push(match e.kind {
+                    EchoKind::Surface => 0,
+                    EchoKind::Volume => 1,
+                });
+                data.push(e.bounces);
+            }
+        }
+        let msg = PointCloud {
+            timestamp: stamp(scan.stamp),
+            frame_id: "world".into(),
+            pose: Some(fg_pose(&Pose::default())),
+            point_stride: ECHO_STRIDE,
+            fields: vec![
+                field("x", 0, NumericType::Float32),
+                field("y", 4, NumericType::Float32),
+                field("z", 8, NumericType::Float32),
+                field("power_db", 12, NumericType::Float32),
+                field("kind", 16, NumericType::Uint8),
+                field("bounces", 17, NumericType::Uint8),
+            ],
+            data: data.into(),
+        };
         self.write(ch, scan.stamp, &msg)
+    }
+
+    /// Logs a finished rotation of an imaging radar: its PNG (`png`, the file written to
+    /// disk) and its detections.
+    pub fn radar_image(&mut self, sweep: &SweepImage, png: &[u8]) -> Result<(), RecordError> {
+        let Some((image_ch, points_ch)) = self.radar.get(sweep.sensor).copied().flatten() else {
+            return Ok(());
+        };
+        let t = sweep.image.timestamps_us.first().map_or(0.0, |&us| {
+            (us - crate::sensor::image::IMAGE_EPOCH_US) as f64 * 1e-6
+        });
+        let msg = CompressedImage {
+            timestamp: stamp(t),
+            frame_id: format!("{}/{}", self.robot, self.sensor_names[sweep.sensor]),
+            data: png.to_vec().into(),
+            format: "png".into(),
+        };
+        self.write(image_ch, t, &msg)?;
+        let mut data = Vec::with_capacity(sweep.detections.len() * 13);
+        for (d, p) in &sweep.detections {
+            for v in [p.x, p.y, p.z] {
+                data.extend_from_slice(&(v as f32).to_le_bytes());
+            }
+            data.push(d.power);
+        }
+        let msg = PointCloud {
+            timestamp: stamp(t),
+            frame_id: "world".into(),
+            pose: Some(fg_pose(&Pose::default())),
+            point_stride: 13,
+            fields: vec![
+                field("x", 0, NumericType::Float32),
+                field("y", 4, NumericType::Float32),
+                field("z", 8, NumericType::Float32),
+                field("power", 12, NumericType::Uint8),
+            ],
+            data: data.into(),
+        };
+        self.write(points_ch, t, &msg)
     }
 
     /// Adds a channel for the map `name`; returns its index for [`McapLog::grid`].
@@ -267,11 +390,6 @@ impl<W: Write + Seek> McapLog<W> {
                 data.extend([red, green, blue, alpha, class as u8]);
             }
         }
-        let field = |name: &str, offset: u32| PackedElementField {
-            name: name.into(),
-            offset,
-            r#type: NumericType::Uint8 as i32,
-        };
         let res = grid.resolution();
         let o = grid.origin() + glam::DVec2::new(c0 as f64, r0 as f64) * res;
         let msg = FgGrid {
@@ -285,7 +403,7 @@ impl<W: Write + Seek> McapLog<W> {
             fields: ["red", "green", "blue", "alpha", "class"]
                 .iter()
                 .zip(0..)
-                .map(|(n, k)| field(n, k))
+                .map(|(n, k)| field(n, k, NumericType::Uint8))
                 .collect(),
             data: data.into(),
         };

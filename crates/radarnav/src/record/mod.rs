@@ -1,7 +1,10 @@
 //! Recording a run to a directory (DESIGN §8): `trajectory.csv`, one binary scan log per
 //! sensor under `scans/`, `summary.json`, `path.png`, `run.mcap`, and for each map built
 //! during the run (see [`Recorder::with_maps`]) `map_<name>.png`, `.pgm`, `.yaml` and `.npy`
-//! (see [`crate::map::export`]) with its scores in `summary.json`.
+//! (see [`crate::map::export`]) with its scores in `summary.json`. With
+//! [`Recorder::with_radar_images`], each imaging radar's rotations go to
+//! `radar/<sensor>/<µs>.png` (the Oxford Radar RobotCar layout) with `radar.timestamps`
+//! and `detections.csv` (see [`radar_images`]).
 //!
 //! `trajectory.csv` has one row per step:
 //! `time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped` — the true
@@ -11,6 +14,7 @@
 
 #[cfg(feature = "mcap")]
 pub mod mcap_log;
+pub mod radar_images;
 pub mod scan_log;
 
 pub use scan_log::{ScanLogError, ScanLogHeader, ScanLogWriter, read_scan_log};
@@ -91,6 +95,12 @@ pub mod files {
     pub const SCANS: &str = "scans";
     /// Coverage of each map against distance (exploration runs).
     pub const COVERAGE: &str = "coverage.csv";
+    /// Directory of the radar images, one `<sensor>/` each.
+    pub const RADAR: &str = "radar";
+    /// Per imaging sensor, one line "<µs> 1" per image (the Oxford dataset's index).
+    pub const RADAR_TIMESTAMPS: &str = "radar.timestamps";
+    /// Per imaging sensor, every image's detections.
+    pub const RADAR_DETECTIONS: &str = "detections.csv";
 }
 
 type Out = BufWriter<File>;
@@ -127,8 +137,16 @@ impl Trail {
     }
 }
 
+/// The image files of one imaging sensor.
+struct ImageFiles {
+    sensor: usize,
+    dir: PathBuf,
+    timestamps: String,
+    detections: Out,
+}
+
 /// Records a run: pass it to [`crate::sim::Simulation::run`], then call [`Recorder::finish`].
-pub struct Recorder {
+pub struct Recorder<'w> {
     dir: PathBuf,
     trajectory: Out,
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
@@ -144,6 +162,7 @@ pub struct Recorder {
     /// Time of the next map message in the MCAP.
     #[cfg_attr(not(feature = "mcap"), allow(dead_code))]
     next_grid: f64,
+    images: Option<(radar_images::RadarImager<'w>, Vec<ImageFiles>)>,
 }
 
 fn create(path: &Path) -> Result<Out, RecordError> {
@@ -155,6 +174,15 @@ fn create(path: &Path) -> Result<Out, RecordError> {
         })
 }
 
+/// Writes `path` whole or not at all: to a temporary name, then renamed.
+fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".partial");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes).map_err(io_at(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io_at(path))
+}
+
 fn io_at(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
     move |source| RecordError::Io {
         path: path.to_owned(),
@@ -162,7 +190,7 @@ fn io_at(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
     }
 }
 
-impl Recorder {
+impl<'w> Recorder<'w> {
     /// Creates `dir` (and `dir/scans`) and opens every output file.
     pub fn create(
         dir: &Path,
@@ -212,7 +240,85 @@ impl Recorder {
             written,
             maps: Vec::new(),
             next_grid: 0.0,
+            images: None,
         })
+    }
+
+    /// Renders and writes the power images of the robot's imaging radars (none: nothing
+    /// changes), their random draws seeded by `seed` on streams of their own.
+    pub fn with_radar_images(
+        mut self,
+        world: &'w World,
+        robot: &Robot,
+        seed: u64,
+    ) -> Result<Self, RecordError> {
+        let Some(imager) = radar_images::RadarImager::new(world, robot, seed) else {
+            return Ok(self);
+        };
+        let mut files = Vec::new();
+        for sensor in imager.sensors() {
+            let dir = self
+                .dir
+                .join(files::RADAR)
+                .join(&robot.sensors[sensor].name);
+            std::fs::create_dir_all(&dir).map_err(io_at(&dir))?;
+            let path = dir.join(files::RADAR_DETECTIONS);
+            let mut detections = create(&path)?;
+            writeln!(
+                detections,
+                "stamp_us,row,azimuth_deg,bin,range_m,power,x,y,z"
+            )
+            .map_err(io_at(&path))?;
+            files.push(ImageFiles {
+                sensor,
+                dir,
+                timestamps: String::new(),
+                detections,
+            });
+        }
+        self.images = Some((imager, files));
+        Ok(self)
+    }
+
+    /// Writes a finished rotation: its PNG, its line of `radar.timestamps`, its detections
+    /// and its MCAP messages.
+    fn write_sweep(&mut self, sweep: &radar_images::SweepImage) -> Result<(), RecordError> {
+        let Some((_, files)) = &mut self.images else {
+            return Ok(());
+        };
+        let Some(f) = files.iter_mut().find(|f| f.sensor == sweep.sensor) else {
+            return Ok(());
+        };
+        let img = &sweep.image;
+        let path = f.dir.join(img.file_name());
+        let mut png = Vec::new();
+        img.write_png(&mut png)
+            .map_err(|e| io_at(&path)(std::io::Error::other(e)))?;
+        write_whole(&path, &png)?;
+        self.written.push(path);
+        f.timestamps.push_str(&img.timestamps_line());
+        let dpath = f.dir.join(files::RADAR_DETECTIONS);
+        for (d, p) in &sweep.detections {
+            writeln!(
+                f.detections,
+                "{},{},{:.4},{},{:.4},{},{:.4},{:.4},{:.4}",
+                img.timestamps_us[d.row],
+                d.row,
+                d.azimuth.to_degrees(),
+                d.bin,
+                d.range,
+                d.power,
+                p.x,
+                p.y,
+                p.z
+            )
+            .map_err(io_at(&dpath))?;
+        }
+        #[cfg(feature = "mcap")]
+        if let Some(m) = &mut self.mcap {
+            m.radar_image(sweep, &png)?;
+        }
+        Ok(())
     }
 
     /// Builds these maps during the run (each a [`Mapper`] of the recorded robot); they are
@@ -257,9 +363,20 @@ impl Recorder {
         self.trajectory.flush().map_err(io_at(&tpath))?;
         #[cfg(feature = "mcap")]
         self.log_grids(summary.duration)?;
-        for (path, log) in self.scan_logs {
+        for (path, log) in std::mem::take(&mut self.scan_logs) {
             log.finish().map_err(io_at(&path))?;
             self.written.push(path);
+        }
+        // Rotations still turning at the end are dropped (see `radar_images`).
+        if let Some((_, files)) = self.images.take() {
+            for mut f in files {
+                let path = f.dir.join(files::RADAR_DETECTIONS);
+                f.detections.flush().map_err(io_at(&path))?;
+                self.written.push(path);
+                let path = f.dir.join(files::RADAR_TIMESTAMPS);
+                write_whole(&path, f.timestamps.as_bytes())?;
+                self.written.push(path);
+            }
         }
         // The last pose is not in the step log (steps log their start).
         self.truth.end(&summary.final_pose);
@@ -420,7 +537,7 @@ impl<'a> MapReport<'a> {
     }
 }
 
-impl Observer for Recorder {
+impl Observer for Recorder<'_> {
     type Error = RecordError;
 
     fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), RecordError> {
@@ -435,6 +552,9 @@ impl Observer for Recorder {
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
             m.scan(sensor, scan)?;
+        }
+        if let Some((imager, _)) = &mut self.images {
+            imager.on_scan(sensor, scan.stamp);
         }
         Ok(())
     }
@@ -475,6 +595,13 @@ impl Observer for Recorder {
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
             m.step(s)?;
+        }
+        let sweeps = match &mut self.images {
+            Some((imager, _)) => imager.on_step(s),
+            None => Vec::new(),
+        };
+        for sweep in &sweeps {
+            self.write_sweep(sweep)?;
         }
         self.truth.push(t);
         self.odometry.push(o);

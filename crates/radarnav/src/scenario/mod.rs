@@ -102,6 +102,19 @@ impl Robot {
     pub fn sensor(&self, name: &str) -> Option<&MountedSensor> {
         self.sensors.iter().find(|s| s.name == name)
     }
+
+    /// The preset sensor `preset`, named after it and mounted where the robot's first sensor
+    /// is (0.4 m over the robot's origin if it has none); `None` for an unknown preset.
+    pub fn with_preset_mount(&self, preset: &str) -> Option<MountedSensor> {
+        Some(MountedSensor {
+            name: preset.to_owned(),
+            config: crate::sensor::preset(preset)?,
+            mount: self
+                .sensors
+                .first()
+                .map_or(Pose::new(0.0, 0.0, 0.4, 0.0), |m| m.mount),
+        })
+    }
 }
 
 /// A loaded scenario.

@@ -60,6 +60,14 @@ pub enum Detector {
 }
 
 impl Detector {
+    /// The CA-CFAR radarnav writes by default: 16 training and 4 guard cells a side,
+    /// P_fa = 10⁻³.
+    pub const CA_CFAR: Self = Self::CaCfar {
+        train: 16,
+        guard: 4,
+        p_fa: 1e-3,
+    };
+
     /// CFEAR's defaults: k = 12, z_min = 60, 2.5 m.
     pub const K_STRONGEST: Self = Self::KStrongest {
         k: 12,

@@ -178,7 +178,7 @@ impl Scan {
 /// The ray at azimuth `az` and elevation `el` (given as its sine and cosine, the same for a
 /// whole plane) from a sensor at `pose`, its origin shifted `lateral` metres to the ray's
 /// left, perpendicular to it in the scan plane.
-fn beam_ray(pose: &Pose, az: f64, (se, ce): (f64, f64), lateral: f64) -> Ray {
+pub fn beam_ray(pose: &Pose, az: f64, (se, ce): (f64, f64), lateral: f64) -> Ray {
     let heading = pose.yaw + az;
     let (s, c) = heading.sin_cos();
     let dir = DVec3::new(ce * c, ce * s, se);
