@@ -41,7 +41,10 @@ use crate::nav::{
 use crate::pose::Pose;
 use crate::sensor::{SensorConfig, preset};
 use crate::vehicle::{DriveCommand, OdometryNoise, VEHICLES, VehicleSpec, vehicle};
-use crate::world::{DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialTable, Object, Shape, World};
+use crate::world::{
+    DB_PER_UNIT_EXTINCTION, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialTable, Object, Shape,
+    World,
+};
 use spec::{Center, MissionSpec, ObjectSpec, ScenarioSpec, SensorSpec, Xy};
 
 /// A scenario file that could not be used: where, which key, and what is wrong.
@@ -297,6 +300,11 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
             .laser_opaque
             .or(base.as_ref().map(|b| b.laser_opaque))
             .unwrap_or(true);
+        let extinction = m
+            .laser_extinction_per_m
+            .map(|v| v.0)
+            .or(base.as_ref().map(|b| b.laser_extinction_per_m))
+            .unwrap_or(0.0);
         let material = Material {
             name: m.name.clone(),
             radar_attenuation_db_per_m: radar,
@@ -329,7 +337,12 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                     .as_ref()
                     .map(|b| b.laser_attenuation_db_per_m)
                     .filter(|a| a.is_finite() || laser_opaque))
-                .unwrap_or(if laser_opaque { f64::INFINITY } else { 0.0 }),
+                .unwrap_or(if laser_opaque {
+                    f64::INFINITY
+                } else {
+                    DB_PER_UNIT_EXTINCTION * extinction
+                }),
+            laser_extinction_per_m: extinction,
             traversable: m
                 .traversable
                 .or(base.as_ref().map(|b| b.traversable))

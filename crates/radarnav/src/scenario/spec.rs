@@ -36,6 +36,8 @@ checked_f64! {
     Fraction: |v| (0.0..=1.0).contains(&v), "a number from 0 to 1";
     /// A volume backscatter coefficient, 1/m.
     Backscatter: |v| (0.0..=10.0).contains(&v), "a number from 0 to 10 (1/m)";
+    /// A laser extinction coefficient, 1/m.
+    Extinction: |v| (0.0..=100.0).contains(&v), "a number from 0 to 100 (1/m)";
     /// A lobe width in degrees.
     LobeDeg: |v| (0.1..=90.0).contains(&v), "a number from 0.1 to 90 (degrees)";
 }
@@ -223,8 +225,10 @@ pub struct MaterialSpec {
     pub specular_lobe_deg: Option<LobeDeg>,
     /// Stops a laser at its surface.
     pub laser_opaque: Option<bool>,
-    /// Laser dB/m when not opaque.
+    /// Laser dB/m when not opaque (default for an aerosol: 4.343 × its extinction).
     pub laser_attenuation_db_per_m: Option<NonNegative>,
+    /// Aerosol extinction k to a laser, 1/m (0–100): returns from the particles (§7.6).
+    pub laser_extinction_per_m: Option<Extinction>,
     /// A robot may drive through.
     pub traversable: Option<bool>,
     /// `"#rrggbb"` for figures.

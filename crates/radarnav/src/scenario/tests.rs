@@ -67,6 +67,34 @@ fn user_material_with_base_and_override() {
 }
 
 #[test]
+fn aerosol_materials_take_their_extinction_and_default_laser_loss() {
+    let s = parse(
+        "[[material]]\nname = \"thin_smoke\"\nbase = \"smoke\"\nlaser_opaque = false\n\
+         [[material]]\nname = \"haze\"\nradar_attenuation_db_per_m = 0\nlaser_opaque = false\n\
+         laser_extinction_per_m = 0.5\ntraversable = true\n\
+         [[object]]\nmaterial = \"haze\"\nsphere = { center = [0, 0], radius = 1 }\n",
+    )
+    .unwrap();
+    let t = s.world.materials();
+    let thin = t.get(t.id("thin_smoke").unwrap());
+    let smoke = t.get(t.id("smoke").unwrap());
+    assert!(thin.laser_aerosol() && !smoke.laser_aerosol());
+    assert_eq!(thin.laser_extinction_per_m, smoke.laser_extinction_per_m);
+    let haze = t.get(t.id("haze").unwrap());
+    assert_eq!(haze.laser_extinction_per_m, 0.5);
+    let loss = haze.attenuation_db_per_m(crate::world::Band::Laser);
+    assert!((loss - 0.5 * 10.0 * std::f64::consts::LOG10_E).abs() < 1e-12);
+    assert!(s.world.has_laser_aerosols());
+    let err = parse("[[material]]\nname = \"x\"\nbase = \"smoke\"\nlaser_extinction_per_m = 101\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("laser_extinction_per_m") && err.contains("0 to 100"),
+        "{err}"
+    );
+}
+
+#[test]
 fn sensor_overrides_apply() {
     let s = parse(&format!(
         "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"sick_lms291\"\nresolution_deg = 0.5\n\

@@ -19,7 +19,7 @@ pub use trace::{HitKind, Return, Tracer};
 
 use glam::DVec3;
 use rand::Rng;
-use rand_distr::StandardNormal;
+use rand_distr::{Exp1, StandardNormal};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -195,8 +195,10 @@ pub fn beam_ray(pose: &Pose, az: f64, (se, ce): (f64, f64), lateral: f64) -> Ray
 ///
 /// A sensor with a signal model and a random beam selection also draws, per ray, a uniform
 /// number in [0, 1) that picks the answering beam ray; the thesis model draws exactly as before.
+/// A laser in a world with aerosol objects (§7.6) then draws, per ray, the exponential optical
+/// depth at which particles return it; in a world without, it draws nothing more.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ScanDraws(Vec<(Beam, f64)>, Vec<f64>);
+pub struct ScanDraws(Vec<(Beam, f64)>, Vec<f64>, Vec<f64>);
 
 impl SensorConfig {
     /// One scan from a sensor at `pose` (world frame) at time `stamp`. Random draws (side-beam
@@ -210,13 +212,13 @@ impl SensorConfig {
         rng: &mut R,
         tracer: &mut Tracer,
     ) -> Scan {
-        let draws = self.draw(rng);
+        let draws = self.draw(world, rng);
         self.trace_scan(world, pose, stamp, &draws, tracer, PARALLEL_MIN_RAYS)
     }
 
     /// The random draws of one scan, taken from `rng` exactly as [`SensorConfig::scan`]
     /// takes them.
-    pub fn draw<R: Rng + ?Sized>(&self, rng: &mut R) -> ScanDraws {
+    pub fn draw<R: Rng + ?Sized>(&self, world: &World, rng: &mut R) -> ScanDraws {
         let n = self.azimuth_count() * self.elevations.len();
         let noisy = self.range_noise_std > 0.0 || self.range_noise_rel > 0.0;
         let side_beams = self.has_side_beams();
@@ -247,7 +249,13 @@ impl SensorConfig {
                 (beam, noise)
             })
             .collect();
-        ScanDraws(rays, select)
+        let aerosols = self.kind == SensorKind::Laser && world.has_laser_aerosols();
+        let optical = if aerosols {
+            (0..n).map(|_| rng.sample(Exp1)).collect()
+        } else {
+            Vec::new()
+        };
+        ScanDraws(rays, select, optical)
     }
 
     /// A scan of this sensor at `pose` and `stamp` with room for its rays and none filled in.
@@ -305,6 +313,7 @@ impl SensorConfig {
         if self.signal.return_mode != ReturnMode::Thesis {
             return self.trace_echo_scan(world, pose, stamp, draws, tracer, parallel_min);
         }
+        let optical = &draws.2;
         let draws = &draws.0;
         assert_eq!(draws.len(), n, "draws of another sensor");
         let mut out = self.empty_scan(pose, stamp);
@@ -326,6 +335,11 @@ impl SensorConfig {
             let (az, _) = out.angles(i);
             let el = plane_sin_cos[i / azimuths];
             let ray = beam_ray(pose, az, el, draws[i].0.side() * out.side_beam_offset);
+            if let Some(&e) = optical.get(i) {
+                let fan = fan_ref.map(|f| (f, pose.yaw + az));
+                let (budget, max) = (self.penetration_db, self.range_max);
+                return tracer.trace_aerosol(world, fan, &ray, band, budget, max, e);
+            }
             match fan_ref {
                 Some(fan) => tracer.trace_in_fan(
                     world,
@@ -510,7 +524,7 @@ mod tests {
         // Side beams (grid walk per ray), one origin (fan), first hit.
         for name in ["radar_thesis_n100", "radar_thesis", "hokuyo_utm30lx"] {
             let cfg = preset(name).unwrap();
-            let draws = cfg.draw(&mut ChaCha8Rng::seed_from_u64(9));
+            let draws = cfg.draw(&world, &mut ChaCha8Rng::seed_from_u64(9));
             let mut scan = |min| cfg.trace_scan(&world, &pose, 0.0, &draws, &mut tr, min);
             let (serial, parallel) = (scan(usize::MAX), scan(1));
             assert!(

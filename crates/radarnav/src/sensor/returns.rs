@@ -232,9 +232,15 @@ mod tests {
             })
             .collect();
         let room = Shape::wall(
-            [(-9.0, -9.0), (9.0, -9.0), (9.0, 9.0), (-9.0, 9.0), (-9.0, -9.0)]
-                .map(|(x, y)| glam::DVec2::new(x, y))
-                .to_vec(),
+            [
+                (-9.0, -9.0),
+                (9.0, -9.0),
+                (9.0, 9.0),
+                (-9.0, 9.0),
+                (-9.0, -9.0),
+            ]
+            .map(|(x, y)| glam::DVec2::new(x, y))
+            .to_vec(),
             0.2,
             2.5,
         )
@@ -250,8 +256,8 @@ mod tests {
             first.signal.dynamic_range_db = 200.0;
             let (a, b) = (scan(&thesis, &world, 5), scan(&first, &world, 5));
             assert_eq!(a.beams, b.beams, "{name}: side beams differ");
-            assert!(a.beams.iter().any(|&x| x == Beam::Left));
-            assert!(a.beams.iter().any(|&x| x == Beam::Right));
+            assert!(a.beams.contains(&Beam::Left));
+            assert!(a.beams.contains(&Beam::Right));
             for (i, (ra, rb)) in a.ranges.iter().zip(&b.ranges).enumerate() {
                 assert!((ra - rb).abs() < 1e-4, "{name} ray {i}: {ra} vs {rb}");
             }
@@ -260,7 +266,12 @@ mod tests {
             let mut centre = thesis.clone();
             centre.side_beam_offset = 0.0;
             let c = scan(&centre, &world, 5);
-            assert!(c.ranges.iter().zip(&a.ranges).any(|(x, y)| (x - y).abs() > 0.1));
+            assert!(
+                c.ranges
+                    .iter()
+                    .zip(&a.ranges)
+                    .any(|(x, y)| (x - y).abs() > 0.1)
+            );
         }
     }
 
@@ -305,7 +316,12 @@ mod tests {
             if gap.abs() < 0.02 * alpha {
                 continue;
             }
-            assert_eq!(!pole.is_empty(), gap < 0.0, "azimuth {:.2} deg", az.to_degrees());
+            assert_eq!(
+                !pole.is_empty(),
+                gap < 0.0,
+                "azimuth {:.2} deg",
+                az.to_degrees()
+            );
             if let Some(p) = pole.iter().map(|e| e.power_db).reduce(f64::max) {
                 seen += 1;
                 power.push((az, p));

@@ -5,6 +5,11 @@
 //! attenuation of the volumes the ray is inside is constant, so the budget falls linearly and
 //! the depth where it reaches zero is exact. Radar, laser and ground truth share this walk and
 //! differ only in the [`Band`] that says how each material attenuates.
+//!
+//! A laser in an aerosol (DESIGN §7.6) is given one exponential draw E per ray: the ray
+//! returns from the particles where its optical depth ∫k dt reaches E, i.e. from depth d with
+//! probability 1 − exp(−k·d). With aerosols modelled, a ray whose budget runs out first is
+//! lost (its return is too weak for the link budget) instead of ending exhausted.
 
 use serde::{Deserialize, Serialize};
 
@@ -44,14 +49,18 @@ pub struct Return {
     pub material: Option<MaterialId>,
 }
 
+/// A volume a ray is inside: (exit distance, dB/m, material, aerosol extinction 1/m).
+type Active = (f64, f64, MaterialId, f64);
+
 /// A ray tracer with reusable buffers; one per thread.
 #[derive(Clone, Debug, Default)]
 pub struct Tracer {
     query: RayQuery,
     /// The candidate lists of the scan being traced ([`crate::sensor`] builds them).
     pub(crate) fan: Fan,
-    /// Volumes the ray is currently inside: (exit distance, dB/m, material).
-    active: Vec<(f64, f64, MaterialId)>,
+    /// Volumes the ray is currently inside: (exit distance, dB/m, material, aerosol
+    /// extinction 1/m).
+    active: Vec<Active>,
     /// The echo walk's buffers, for sensors with a signal model.
     pub(crate) echo: super::echo::EchoTracer,
 }
@@ -67,7 +76,7 @@ impl Tracer {
         budget_db: f64,
         t_max: f64,
     ) -> Return {
-        self.trace_from(world, None, ray, band, budget_db, t_max)
+        self.trace_from(world, None, ray, band, budget_db, t_max, None)
     }
 
     /// [`Tracer::trace`] for a ray from the origin of `fan` ([`World::fan`], built for at
@@ -84,9 +93,34 @@ impl Tracer {
         budget_db: f64,
         t_max: f64,
     ) -> Return {
-        self.trace_from(world, Some((fan, heading)), ray, band, budget_db, t_max)
+        self.trace_from(
+            world,
+            Some((fan, heading)),
+            ray,
+            band,
+            budget_db,
+            t_max,
+            None,
+        )
     }
 
+    /// [`Tracer::trace`] (through `fan` if given, as [`Tracer::trace_in_fan`]) with aerosol
+    /// returns: `optical_depth` is the ray's exponential draw E (see the module doc).
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_aerosol(
+        &mut self,
+        world: &World,
+        fan: Option<(&Fan, f64)>,
+        ray: &Ray,
+        band: Band,
+        budget_db: f64,
+        t_max: f64,
+        optical_depth: f64,
+    ) -> Return {
+        self.trace_from(world, fan, ray, band, budget_db, t_max, Some(optical_depth))
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn trace_from(
         &mut self,
         world: &World,
@@ -95,6 +129,7 @@ impl Tracer {
         band: Band,
         budget_db: f64,
         t_max: f64,
+        optical_depth: Option<f64>,
     ) -> Return {
         // The ground plane z = 0 is solid to every sensor; a ray tilted down ends on it.
         let t_ground = if ray.dir.z < 0.0 {
@@ -115,6 +150,7 @@ impl Tracer {
             band,
             budget_db,
             reach,
+            optical_depth,
             &mut self.active,
         );
         if ret.kind == HitKind::None && t_ground <= t_max {
@@ -131,17 +167,21 @@ impl Tracer {
 /// The walk proper over the ray's intervals up to `t_max`. It asks `intervals` for the next
 /// entry only as far as the walk can get without it (the next exit, `t_max`, or where the
 /// budget runs out), so that a front-to-back source does no work behind the ray's end.
+/// `optical_depth`: the ray's aerosol draw, if aerosols are modelled.
 fn walk(
     intervals: &mut impl IntervalSource,
     world: &World,
     band: Band,
     budget_db: f64,
     t_max: f64,
-    active: &mut Vec<(f64, f64, MaterialId)>,
+    optical_depth: Option<f64>,
+    active: &mut Vec<Active>,
 ) -> Return {
     let materials = world.materials();
     active.clear();
     let mut budget = budget_db;
+    // Optical depth still to go before a particle return.
+    let mut to_particle = optical_depth.unwrap_or(f64::INFINITY);
     let mut t = 0.0;
     loop {
         let (exit_slot, t_exit) = active
@@ -161,12 +201,40 @@ fn walk(
         let entry = intervals.peek(t_exit.min(t_max).min(spent_by));
         let t_entry = entry.map_or(f64::INFINITY, |iv| iv.t_in.max(0.0));
         let t_next = t_entry.min(t_exit).min(t_max);
+        let kappa: f64 = active.iter().map(|a| a.3).sum();
+        let t_spent = if alpha > 0.0 {
+            t + budget / alpha
+        } else {
+            f64::INFINITY
+        };
+        if kappa > 0.0 {
+            // The particles return the ray before the segment ends and before the budget is
+            // spent: the laser sees the aerosol as a surface there.
+            let t_particle = t + to_particle / kappa;
+            if t_particle < t_next && t_particle < t_spent {
+                let densest = active.iter().max_by(|a, b| a.3.total_cmp(&b.3));
+                return Return {
+                    range: t_particle,
+                    kind: HitKind::Solid,
+                    material: densest.map(|a| a.2),
+                };
+            }
+            to_particle -= kappa * (t_next - t);
+        }
         if alpha > 0.0 {
             let cost = alpha * (t_next - t);
             if cost >= budget {
+                if optical_depth.is_some() {
+                    // Too weak for the link budget: lost.
+                    return Return {
+                        range: f64::INFINITY,
+                        kind: HitKind::None,
+                        material: None,
+                    };
+                }
                 let densest = active.iter().max_by(|a, b| a.1.total_cmp(&b.1));
                 return Return {
-                    range: t + budget / alpha,
+                    range: t_spent,
                     kind: HitKind::Exhausted,
                     material: densest.map(|a| a.2),
                 };
@@ -184,7 +252,8 @@ fn walk(
         match entry {
             Some(iv) if t_entry <= t_exit => {
                 intervals.pop();
-                let a = materials.get(iv.material).attenuation_db_per_m(band);
+                let m = materials.get(iv.material);
+                let a = m.attenuation_db_per_m(band);
                 if a.is_infinite() {
                     return Return {
                         range: t,
@@ -192,8 +261,13 @@ fn walk(
                         material: Some(iv.material),
                     };
                 }
-                if a > 0.0 {
-                    active.push((iv.t_out, a, iv.material));
+                let k = if optical_depth.is_some() && band == Band::Laser && m.laser_aerosol() {
+                    m.laser_extinction_per_m
+                } else {
+                    0.0
+                };
+                if a > 0.0 || k > 0.0 {
+                    active.push((iv.t_out, a, iv.material, k));
                 }
             }
             _ => {
@@ -228,6 +302,63 @@ mod tests {
         assert_eq!(r.kind, HitKind::Exhausted);
         assert!((r.range - 4.5).abs() < 1e-12, "{r:?}");
         assert_eq!(r.material, w.materials().id("foliage_dense"));
+    }
+
+    /// Laser rays into an aerosol return from its particles at depth d with probability
+    /// 1 − exp(−k·d): over many seeded rays the share of returns before each depth lies in
+    /// the 99.9 % binomial band around it; past the link budget no return comes back; a
+    /// wall inside the cloud returns the rays that reach it.
+    #[test]
+    fn laser_returns_from_an_aerosol_follow_beer_lambert() {
+        use rand::{Rng, SeedableRng};
+        let w = world(&[
+            (sphere(6.0, 0.0, 5.0), "dust"),
+            (sphere(2.0, 0.0, 0.5), "concrete"),
+        ]);
+        let dust = w.materials().get(w.materials().id("dust").unwrap());
+        let k = dust.laser_extinction_per_m;
+        assert!(dust.laser_aerosol() && k > 1.0);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut tracer = Tracer::default();
+        let n = 20_000;
+        // A budget that outlasts the cloud: every ray returns from the dust or from the post
+        // at x = 1.5 (0.5 m into the cloud).
+        let depths: Vec<Return> = (0..n)
+            .map(|_| {
+                let e: f64 = rng.sample(rand_distr::Exp1);
+                tracer.trace_aerosol(&w, None, &x_ray(0.0), Band::Laser, 1e4, 30.0, e)
+            })
+            .collect();
+        for d in [0.05, 0.1, 0.2, 0.3, 0.4] {
+            let p = 1.0 - (-k * d).exp();
+            let share = depths.iter().filter(|r| r.range - 1.0 <= d).count() as f64 / n as f64;
+            let band = 3.29 * (p * (1.0 - p) / n as f64).sqrt();
+            assert!((share - p).abs() < band, "d {d}: {share} vs {p} ± {band}");
+        }
+        assert!(depths.iter().all(|r| r.kind == HitKind::Solid));
+        let dust_id = w.materials().id("dust");
+        assert!(depths.iter().all(|r| r.range <= 1.5 + 1e-9));
+        let posts = depths.iter().filter(|r| r.material != dust_id).count();
+        let p = (-k * 0.5f64).exp();
+        let band = 3.29 * (p * (1.0 - p) / n as f64).sqrt();
+        assert!((posts as f64 / n as f64 - p).abs() < band, "{posts}");
+        // With a 6 dB budget (spent 6 / (4.343 k) = 0.3 m in, before the post), the rays
+        // that get that far are lost: a share exp(−6 / 4.343).
+        let budget = 6.0;
+        let lost = (0..n)
+            .filter(|_| {
+                let e: f64 = rng.sample(rand_distr::Exp1);
+                let r = tracer.trace_aerosol(&w, None, &x_ray(0.0), Band::Laser, budget, 30.0, e);
+                assert!(r.kind != HitKind::Exhausted);
+                r.kind == HitKind::None
+            })
+            .count();
+        let p = (-budget / crate::world::DB_PER_UNIT_EXTINCTION).exp();
+        let band = 3.29 * (p * (1.0 - p) / n as f64).sqrt();
+        assert!((lost as f64 / n as f64 - p).abs() < band, "lost {lost}");
+        // The radar and an opaque-laser world ignore the draw.
+        let r = tracer.trace_aerosol(&w, None, &x_ray(0.0), Band::Radar, 3.0, 30.0, 1e-6);
+        assert_eq!(r, tracer.trace(&w, &x_ray(0.0), Band::Radar, 3.0, 30.0));
     }
 
     #[test]
@@ -328,7 +459,7 @@ mod tests {
                 for band in [Band::Radar, Band::Laser, Band::Surface] {
                     let pruned = tr.trace(&w, &ray, band, budget, 30.0);
                     let all = w.ray_intervals_exhaustive(&ray, 30.0, &mut q);
-                    let whole = walk(&mut SortedIntervals::new(all), &w, band, budget, 30.0, &mut active);
+                    let whole = walk(&mut SortedIntervals::new(all), &w, band, budget, 30.0, None, &mut active);
                     proptest::prop_assert_eq!(pruned, whole);
                 }
             }
@@ -355,7 +486,7 @@ mod tests {
                     let ordered = tr.trace(&w, &ray, band, budget, t_max);
                     let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
                     let whole =
-                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, &mut active);
+                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
                     proptest::prop_assert_eq!(ordered, whole, "{:?} {:?}", ray, band);
                 }
             }
@@ -385,7 +516,7 @@ mod tests {
                     let fanned = tr.trace_in_fan(&w, &fan, heading, &ray, band, budget, t_max);
                     let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
                     let whole =
-                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, &mut active);
+                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
                     proptest::prop_assert_eq!(fanned, whole, "{:?} heading {} {:?}", ray, heading, band);
                 }
             }
@@ -436,6 +567,7 @@ mod tests {
                     band,
                     budget,
                     30.0,
+                    None,
                     &mut active,
                 );
                 assert_eq!(ordered, whole, "ray {i} {band:?}");

@@ -534,7 +534,7 @@ impl<'a> Simulation<'a> {
         }
         let draws: Vec<_> = jobs
             .iter()
-            .map(|&(i, _, _)| sensors[i].config.draw(&mut self.sensor_rngs[i]))
+            .map(|&(i, _, _)| sensors[i].config.draw(self.world, &mut self.sensor_rngs[i]))
             .collect();
         let world = self.world;
         let scans: Vec<Scan> = jobs

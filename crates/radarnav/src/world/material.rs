@@ -10,7 +10,8 @@
 //! | `foliage_light` | 1.55 | opaque | Weissberger 1982 model at 77 GHz for depths < 14 m, in the range 0.75 (bare) – 2.5 (in leaf) dB/m of the measurements collected by Rappaport & Deng, ICC 2015 |
 //! | `foliage_dense` | 3.0 | opaque | middle of 2–4 dB/m for dry dense leaves at 38 GHz (same collection; wet leaves reach 6–8 dB/m) |
 //! | `smoke` | 0.0 | opaque | mm-wave loss in smoke and fog ≈ 0 (Pierce et al., SPIE 4530) |
-//! | `dust` | 0.02 | 20 dB/m | < 0.02 dB/m at 94 GHz for 3000 mg/m³ (Wikner, ARL-TR-4399, 2008); the laser figure is our choice for a cloud a laser sees about half a metre into |
+//! | `dust` | 0.02 | k = 4.6 /m (20 dB/m) | < 0.02 dB/m at 94 GHz for 3000 mg/m³ (Wikner, ARL-TR-4399, 2008); the laser figure is chosen: a cloud a laser sees about half a metre into |
+//! | `fog` | 0.0 | k = 0.078 /m (0.34 dB/m) | mm-wave loss in fog < 1 dB/km (Pierce et al.); laser 170–340 dB/km at 50 m visibility (same source), the upper figure |
 //! | `glass` | 500 | 60 dB/m | ≈ 3 dB through a 6 mm pane at 77 GHz; ≈ 8 % loss per pane at 905 nm: a laser sees through windows |
 //! | `concrete`, `wood`, `metal`, `absorber` | solid | opaque | stop both rays at the surface |
 //! | `ground` | solid | opaque | the plane z = 0 under every world; a ray tilted down ends there |
@@ -18,7 +19,14 @@
 //! The echo model (DESIGN §7.2) adds, per material, a reflectivity ρ (power fraction returned
 //! at entry, normal incidence), a volume backscatter coefficient η (power fraction scattered
 //! back per metre inside), and the width of a specular material's lobe. The thesis model uses
-//! none of them. (The laser's returns from aerosol particles, §7.6, are not modelled yet.)
+//! none of them.
+//!
+//! Aerosols (DESIGN §7.6): a material that is not laser-opaque and has a laser extinction
+//! coefficient k > 0 (`laser_extinction_per_m`) scatters a laser ray back from its particles:
+//! the ray returns from depth d with probability 1 − exp(−k·d) (Beer–Lambert; one-way loss
+//! 10·log10(e)·k = 4.343·k dB/m). `smoke` keeps the thesis' opaque laser; its k (1.3 /m, a
+//! visibility of 3 m by Koschmieder's 3.912 / V, chosen) applies to a variant with
+//! `laser_opaque = false`.
 //!
 //! | material | ρ | η (1/m) | specular lobe | source |
 //! |---|---|---|---|---|
@@ -73,6 +81,10 @@ pub struct Material {
     pub laser_opaque: bool,
     /// Laser loss inside when not opaque, dB/m.
     pub laser_attenuation_db_per_m: f64,
+    /// Extinction coefficient k of an aerosol to a laser, 1/m: a ray inside returns from the
+    /// particles at depth d with probability 1 − exp(−k·d) (DESIGN §7.6). 0 for other
+    /// materials; ignored while `laser_opaque`.
+    pub laser_extinction_per_m: f64,
     /// Whether a robot may drive through it.
     pub traversable: bool,
     /// Colour in figures, RGB.
@@ -93,6 +105,11 @@ impl Material {
     /// Whether the radar sees into it (finite attenuation).
     pub fn radar_penetrable(&self) -> bool {
         self.radar_attenuation_db_per_m.is_finite()
+    }
+
+    /// Whether a laser ray inside it may return from its particles (§7.6).
+    pub fn laser_aerosol(&self) -> bool {
+        !self.laser_opaque && self.laser_extinction_per_m > 0.0
     }
 }
 
@@ -115,10 +132,14 @@ fn builtin(
         specular_lobe: DEFAULT_SPECULAR_LOBE_DEG.to_radians(),
         laser_opaque: laser.is_none(),
         laser_attenuation_db_per_m: laser.unwrap_or(f64::INFINITY),
+        laser_extinction_per_m: 0.0,
         traversable,
         color,
     }
 }
+
+/// One-way dB per metre of an extinction of 1 /m: 10·log10(e).
+pub const DB_PER_UNIT_EXTINCTION: f64 = 10.0 * std::f64::consts::LOG10_E;
 
 /// Default full width of a specular echo lobe, degrees (chosen: a smooth wall or pane).
 pub const DEFAULT_SPECULAR_LOBE_DEG: f64 = 10.0;
@@ -127,6 +148,10 @@ pub const DEFAULT_SPECULAR_LOBE_DEG: f64 = 10.0;
 pub fn builtin_materials() -> Vec<Material> {
     let backscatter = |m: Material, eta: f64| Material {
         radar_backscatter_per_m: eta,
+        ..m
+    };
+    let aerosol = |m: Material, k: f64| Material {
+        laser_extinction_per_m: k,
         ..m
     };
     let inf = f64::INFINITY;
@@ -159,13 +184,23 @@ pub fn builtin_materials() -> Vec<Material> {
             builtin("foliage_dense", 3.0, 0.1, false, None, false, [40, 130, 50]),
             0.2,
         ),
-        builtin("smoke", 0.0, 0.0, false, None, true, [175, 170, 185]),
-        backscatter(
-            builtin("dust", 0.02, 0.0, false, Some(20.0), true, [205, 185, 140]),
-            1e-4,
+        aerosol(
+            builtin("smoke", 0.0, 0.0, false, None, true, [175, 170, 185]),
+            3.912 / 3.0,
+        ),
+        aerosol(
+            backscatter(
+                builtin("dust", 0.02, 0.0, false, Some(20.0), true, [205, 185, 140]),
+                1e-4,
+            ),
+            20.0 / DB_PER_UNIT_EXTINCTION,
         ),
         builtin("absorber", inf, 0.0, false, None, false, [60, 40, 60]),
         builtin("ground", inf, 0.15, false, None, true, [200, 190, 160]),
+        aerosol(
+            builtin("fog", 0.0, 0.0, false, Some(0.34), true, [215, 220, 225]),
+            0.34 / DB_PER_UNIT_EXTINCTION,
+        ),
     ]
 }
 
@@ -241,6 +276,7 @@ mod tests {
             "dust",
             "absorber",
             "ground",
+            "fog",
         ] {
             assert!(t.id(name).is_some(), "{name}");
         }

@@ -9,7 +9,8 @@ pub mod shape;
 
 pub use fan::Fan;
 pub use material::{
-    Band, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialId, MaterialTable, builtin_materials,
+    Band, DB_PER_UNIT_EXTINCTION, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialId, MaterialTable,
+    builtin_materials,
 };
 pub use shape::{OrientedBox, Ray, Shape, ShapeError};
 
@@ -278,6 +279,8 @@ pub struct World {
     part_rects: Vec<(DVec2, DVec2)>,
     grid: Grid,
     ground: MaterialId,
+    /// Whether some object is an aerosol to a laser (§7.6).
+    laser_aerosols: bool,
 }
 
 impl std::fmt::Debug for World {
@@ -329,7 +332,11 @@ impl World {
         let grid = Grid::new(&rects);
         let part_rects = rects.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
         let ground = materials.id("ground").expect("built-ins are never removed");
+        let laser_aerosols = objects
+            .iter()
+            .any(|o| materials.get(o.material).laser_aerosol());
         Self {
+            laser_aerosols,
             materials,
             objects,
             aabbs,
@@ -339,6 +346,11 @@ impl World {
             grid,
             ground,
         }
+    }
+
+    /// Whether some object is an aerosol a laser may return from (DESIGN §7.6).
+    pub fn has_laser_aerosols(&self) -> bool {
+        self.laser_aerosols
     }
 
     /// The material table.
