@@ -264,13 +264,7 @@ const COLOURS: [RGBColor; 4] = [
 ];
 
 fn plot(dir: &Path, s: &Scenario, results: &[ExploreResult]) -> Result<std::path::PathBuf> {
-    // ab_glyph draws text with registered fonts only; the font ships in the binary.
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        epaint_default_fonts::UBUNTU_LIGHT,
-    )
-    .map_err(|_| anyhow::anyhow!("the plot font did not load"))?;
+    plot_font()?;
     let (w, h) = (1400u32, 620u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     let max_d = results
@@ -374,6 +368,18 @@ fn runs_first_sensor(results: &[ExploreResult]) -> &str {
     results.first().map_or("", |r| r.job.sensor.as_str())
 }
 
-fn draw_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+/// Registers the plots' font: ab_glyph draws text with registered fonts only; the font
+/// ships in the binary.
+pub fn plot_font() -> Result<()> {
+    plotters::style::register_font(
+        "sans-serif",
+        FontStyle::Normal,
+        epaint_default_fonts::UBUNTU_LIGHT,
+    )
+    .map_err(|_| anyhow::anyhow!("the plot font did not load"))
+}
+
+/// A plotting error as an `anyhow` error.
+pub fn draw_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow::anyhow!("drawing the plot: {e:?}")
 }

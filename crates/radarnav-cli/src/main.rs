@@ -4,6 +4,7 @@ mod bench_cmd;
 mod compare_cmd;
 mod run_cmd;
 mod signal_cmd;
+mod signal_demo;
 
 use std::fs;
 use std::io::Write;
@@ -451,7 +452,8 @@ fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
     }
     say!("figures written to {}", out.display());
     map_demo(&s, seed, out)?;
-    bug_demo(seed, out)
+    bug_demo(seed, out)?;
+    signal_demo::signal_demo(out, seed)
 }
 
 /// The second half of the demo: the foliage-wall mission driven once while four maps are
@@ -671,7 +673,7 @@ fn scan(
     fs::write(out.join("scan.json"), serde_json::to_vec_pretty(&json)?)
         .context("writing scan.json")?;
     write_csv(&out.join("scan.csv"), &scan, &materials)?;
-    let signal = signal_cmd::write_signal_outputs(
+    let (signal, _) = signal_cmd::write_signal_outputs(
         &s,
         &mounted,
         &sensor_pose,

@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use radarnav::scenario::MountedSensor;
 use radarnav::sensor::Tracer;
 use radarnav::sensor::cfar::{Detector, detect};
-use radarnav::sensor::image::{IMAGE_EPOCH_US, power_image, write_grey_png};
+use radarnav::sensor::image::{IMAGE_EPOCH_US, PowerImage, power_image, write_grey_png};
 use radarnav::{Pose, Scan, Scenario};
 use rand_chacha::ChaCha8Rng;
 
@@ -26,7 +26,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Writes `echoes.csv` for a multi-echo scan and, for a sensor with a power image,
 /// `polar.png`, `radar.timestamps`, `cartesian.png` and `detections.csv`. Returns the names
-/// written.
+/// written and the image.
 pub fn write_signal_outputs(
     s: &Scenario,
     mounted: &MountedSensor,
@@ -35,7 +35,7 @@ pub fn write_signal_outputs(
     materials: &[&str],
     rng: &mut ChaCha8Rng,
     out: &Path,
-) -> Result<Vec<String>> {
+) -> Result<(Vec<String>, Option<PowerImage>)> {
     let mut written = Vec::new();
     if !scan.echo_start.is_empty() {
         let mut csv = String::from(
@@ -62,7 +62,7 @@ pub fn write_signal_outputs(
         written.push("echoes.csv".to_owned());
     }
     let Some(im) = mounted.config.signal.image else {
-        return Ok(written);
+        return Ok((written, None));
     };
     let started = Instant::now();
     let img = power_image(
@@ -134,5 +134,5 @@ pub fn write_signal_outputs(
         img.rows(),
         img.bins
     );
-    Ok(written)
+    Ok((written, Some(img)))
 }

@@ -132,27 +132,55 @@ impl PowerImage {
         Ok(img)
     }
 
+    /// The value at a point `forward` metres ahead of and `right` metres to the right of the
+    /// sensor (nearest row and bin); `None` outside the image's range.
+    pub fn value_at(&self, forward: f64, right: f64) -> Option<u8> {
+        let bin = (forward.hypot(right) / self.bin_size) as usize;
+        if bin >= self.bins || self.rows() == 0 {
+            return None;
+        }
+        let step = std::f64::consts::TAU / self.rows() as f64;
+        let theta = right.atan2(forward).rem_euclid(std::f64::consts::TAU);
+        let k = ((theta / step).round() as usize) % self.rows();
+        Some(self.power[k * self.bins + bin])
+    }
+
     /// A Cartesian view for people: `pixels` × `pixels`, `metres_per_pixel`, the sensor in the
     /// middle, its x axis up and its left to the left (nearest row and bin).
     pub fn cartesian(&self, pixels: usize, metres_per_pixel: f64) -> Vec<u8> {
         let mut out = vec![0u8; pixels * pixels];
         let half = pixels as f64 / 2.0;
-        let step = std::f64::consts::TAU / self.rows().max(1) as f64;
         for row in 0..pixels {
             for col in 0..pixels {
                 let forward = (half - row as f64 - 0.5) * metres_per_pixel;
                 let right = (col as f64 + 0.5 - half) * metres_per_pixel;
-                let r = forward.hypot(right);
-                let bin = (r / self.bin_size) as usize;
-                if bin >= self.bins {
-                    continue;
+                if let Some(v) = self.value_at(forward, right) {
+                    out[row * pixels + col] = v;
                 }
-                let theta = right.atan2(forward).rem_euclid(std::f64::consts::TAU);
-                let k = ((theta / step).round() as usize) % self.rows();
-                out[row * pixels + col] = self.power[k * self.bins + bin];
             }
         }
         out
+    }
+}
+
+/// Appends to `out` the echoes of every beam ray of `sensor` at `theta` radians clockwise from
+/// the x axis of the sensor at `pose` (the echoes of one image row, before speckle).
+pub fn azimuth_echoes(
+    sensor: &SensorConfig,
+    world: &World,
+    pose: &Pose,
+    theta: f64,
+    tracer: &mut Tracer,
+    out: &mut Vec<Echo>,
+) {
+    let model = sensor.signal.echo_model();
+    let el = sensor.elevations.first().copied().unwrap_or(0.0);
+    for b in sensor.signal.beam(0.0) {
+        // Clockwise in the radar frame is clockwise in the world too: yaw − θ.
+        let ray = beam_ray(pose, -theta + b.d_az, (el + b.d_el).sin_cos(), 0.0);
+        tracer
+            .echo
+            .echoes(world, &ray, b.weight, sensor.range_max, &model, out);
     }
 }
 
@@ -172,9 +200,6 @@ pub fn power_image<R: Rng + ?Sized>(
     let bin = sensor.range_bin?;
     let rows = (std::f64::consts::TAU / sensor.resolution).round() as usize;
     let bins = (sensor.range_max / bin).round() as usize;
-    let model = sensor.signal.echo_model();
-    let beam = sensor.signal.beam(0.0);
-    let el = sensor.elevations.first().copied().unwrap_or(0.0);
     let noise = 10f64.powf(im.noise_floor_db / 10.0);
     let sigma = C / (2.0 * im.bandwidth_hz) / (8.0 * std::f64::consts::LN_2).sqrt();
     let reach = (3.0 * sigma / bin).ceil() as i64;
@@ -199,13 +224,7 @@ pub fn power_image<R: Rng + ?Sized>(
                 % u32::from(im.encoder_size)) as u16,
         );
         echoes.clear();
-        for b in &beam {
-            // Clockwise in the radar frame is clockwise in the world too: yaw − θ.
-            let ray = beam_ray(&pose, -theta + b.d_az, (el + b.d_el).sin_cos(), 0.0);
-            tracer
-                .echo
-                .echoes(world, &ray, b.weight, sensor.range_max, &model, &mut echoes);
-        }
+        azimuth_echoes(sensor, world, &pose, theta, tracer, &mut echoes);
         acc.fill(0.0);
         let mut splat = |range: f64, p: f64| {
             let centre = range / bin - 0.5;
