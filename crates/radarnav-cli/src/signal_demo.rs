@@ -119,6 +119,7 @@ fn ascope(
         &s.world,
         pose,
         img.azimuth(k),
+        None,
         &mut Tracer::default(),
         &mut echoes,
     );

@@ -21,7 +21,7 @@ use super::echo::{Echo, EchoKind, power_linear};
 use super::signal::ImageConfig;
 use super::{SensorConfig, Tracer, beam_ray};
 use crate::pose::Pose;
-use crate::world::World;
+use crate::world::{Fan, World};
 
 /// Speed of light, m/s.
 const C: f64 = 299_792_458.0;
@@ -164,23 +164,35 @@ impl PowerImage {
 }
 
 /// Appends to `out` the echoes of every beam ray of `sensor` at `theta` radians clockwise from
-/// the x axis of the sensor at `pose` (the echoes of one image row, before speckle).
+/// the x axis of the sensor at `pose` (the echoes of one image row, before speckle). A `fan`
+/// built at the sensor's position (see [`World::fan`]) speeds the walk up; one built
+/// elsewhere is not used.
 pub fn azimuth_echoes(
     sensor: &SensorConfig,
     world: &World,
     pose: &Pose,
     theta: f64,
+    fan: Option<&Fan>,
     tracer: &mut Tracer,
     out: &mut Vec<Echo>,
 ) {
     let model = sensor.signal.echo_model();
     let el = sensor.elevations.first().copied().unwrap_or(0.0);
+    let fan = fan.filter(|f| f.origin() == pose.position());
     for b in sensor.signal.beam(0.0) {
         // Clockwise in the radar frame is clockwise in the world too: yaw − θ.
         let ray = beam_ray(pose, -theta + b.d_az, (el + b.d_el).sin_cos(), 0.0);
-        tracer
-            .echo
-            .echoes(world, &ray, b.weight, sensor.range_max, &model, out);
+        let (w, max) = (b.weight, sensor.range_max);
+        match fan {
+            Some(fan) => {
+                let heading = pose.yaw - theta + b.d_az;
+                let e = &mut tracer.echo;
+                e.echoes_in_fan(world, fan, heading, &ray, w, max, &model, out);
+            }
+            None => {
+                tracer.echo.echoes(world, &ray, w, max, &model, out);
+            }
+        }
     }
 }
 
@@ -211,7 +223,10 @@ pub fn power_image<R: Rng + ?Sized>(
         bin_size: bin,
         power: Vec::with_capacity(rows * bins),
     };
+    let mut fan = std::mem::take(&mut tracer.fan);
+    let mut fan_ok = false;
     let mut acc = vec![0.0f64; bins];
+    let noise_bytes = NoiseBytes::new(im.display_range_db);
     let mut parts: Vec<f64> = Vec::with_capacity(2 * reach as usize + 1);
     let mut echoes: Vec<Echo> = Vec::new();
     for k in 0..rows {
@@ -224,7 +239,13 @@ pub fn power_image<R: Rng + ?Sized>(
                 % u32::from(im.encoder_size)) as u16,
         );
         echoes.clear();
-        azimuth_echoes(sensor, world, &pose, theta, tracer, &mut echoes);
+        if k == 0 {
+            // Rows taken from where the first was (a sensor standing still) share one fan.
+            let rays = rows * sensor.signal.beam(0.0).len();
+            fan_ok = sensor.scan_fan(world, &pose, rays, &mut fan);
+        }
+        let f = fan_ok.then_some(&fan);
+        azimuth_echoes(sensor, world, &pose, theta, f, tracer, &mut echoes);
         acc.fill(0.0);
         let mut splat = |range: f64, p: f64| {
             let centre = range / bin - 0.5;
@@ -279,14 +300,85 @@ pub fn power_image<R: Rng + ?Sized>(
                 }
             }
         }
-        for a in &acc {
-            let total = a + noise * rng.sample::<f64, _>(Exp1);
-            let db = 10.0 * total.log10();
-            let v = (db - im.noise_floor_db) / im.display_range_db * 255.0;
-            img.power.push(v.clamp(0.0, 255.0) as u8);
+        for &a in &acc {
+            let r = rng.next_u32();
+            if a == 0.0 {
+                img.power.push(noise_bytes.byte(r));
+            } else {
+                let total = a + noise * exp_of(r);
+                let db = 10.0 * total.log10();
+                let v = (db - im.noise_floor_db) / im.display_range_db * 255.0;
+                img.power.push(v.clamp(0.0, 255.0) as u8);
+            }
         }
     }
+    tracer.fan = fan;
     Some(img)
+}
+
+/// The standard exponential draw of the uniform 32-bit draw `r`: −ln(1 − u) with
+/// u = (r + ½) / 2³², by inversion.
+fn exp_of(r: u32) -> f64 {
+    let u = (f64::from(r) + 0.5) / 4_294_967_296.0;
+    -(-u).ln_1p()
+}
+
+/// The byte of a bin holding receiver noise alone, straight from the uniform draw that
+/// [`exp_of`] would turn into the noise: the byte is a step function of the draw, so 255
+/// thresholds give it exactly, without a logarithm per bin (most bins of an image hold noise
+/// alone). A table over the draw's top bits answers at once where its bucket holds no
+/// threshold (all but at most 255 of its buckets), a search over the thresholds elsewhere.
+struct NoiseBytes {
+    /// `thresholds[b]`: how many draws give a byte ≤ b.
+    thresholds: Vec<u64>,
+    /// Per bucket of draws (top [`NoiseBytes::BITS`] bits): its byte, or
+    /// [`NoiseBytes::SEARCH`] when a threshold falls inside it.
+    table: Vec<u16>,
+}
+
+impl NoiseBytes {
+    /// Bits of the draw that index the table.
+    const BITS: u32 = 14;
+    /// Marks a bucket that holds a threshold.
+    const SEARCH: u16 = 256;
+
+    /// For noise of mean 1 mapped at `display_range_db` dB over 255 steps from its mean.
+    fn new(display_range_db: f64) -> Self {
+        let thresholds: Vec<u64> = (0..255u32)
+            .map(|b| {
+                // Byte ≤ b ⟺ 10·log10(E) < (b + 1)·D/255 ⟺ E < e_b ⟺ u < 1 − exp(−e_b).
+                let e_b = 10f64.powf(f64::from(b + 1) * display_range_db / 2550.0);
+                let c = -(-e_b).exp_m1();
+                (c * 4_294_967_296.0 - 0.5)
+                    .ceil()
+                    .clamp(0.0, 4_294_967_296.0) as u64
+            })
+            .collect();
+        let shift = 32 - Self::BITS;
+        let mut b = 0;
+        let table = (0..1u64 << Self::BITS)
+            .map(|i| {
+                let (lo, hi) = (i << shift, ((i + 1) << shift) - 1);
+                while b < thresholds.len() && thresholds[b] <= lo {
+                    b += 1;
+                }
+                // Byte of `lo` is b; of `hi` too unless the next threshold lies in between.
+                if b < thresholds.len() && thresholds[b] <= hi {
+                    Self::SEARCH
+                } else {
+                    b as u16
+                }
+            })
+            .collect();
+        Self { thresholds, table }
+    }
+
+    fn byte(&self, r: u32) -> u8 {
+        match self.table[(r >> (32 - Self::BITS)) as usize] {
+            Self::SEARCH => self.thresholds.partition_point(|&t| t <= u64::from(r)) as u8,
+            b => b as u8,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -296,6 +388,33 @@ mod tests {
     use crate::world::{MaterialTable, Object, Shape};
     use glam::DVec3;
     use rand::SeedableRng;
+
+    #[test]
+    fn noise_bytes_from_thresholds_equal_the_direct_mapping() {
+        for display in [30.0, 50.0, 65.0] {
+            let nb = NoiseBytes::new(display);
+            let mut checked = 0;
+            for k in 0..200_000u64 {
+                let r = (k * 21_474 + k % 7) as u32;
+                let v = 10.0 * exp_of(r).log10() / display * 255.0;
+                // Draws within rounding of a step are left out.
+                if (v - v.round()).abs() < 1e-6 {
+                    continue;
+                }
+                assert_eq!(
+                    nb.byte(r),
+                    v.clamp(0.0, 255.0) as u8,
+                    "r {r} display {display}"
+                );
+                checked += 1;
+            }
+            assert!(checked > 199_000);
+            assert_eq!(
+                nb.byte(u32::MAX),
+                (10.0 * exp_of(u32::MAX).log10() / display * 255.0) as u8
+            );
+        }
+    }
 
     #[test]
     fn oxford_png_round_trips_byte_exactly() {

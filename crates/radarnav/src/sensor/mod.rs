@@ -321,15 +321,7 @@ impl SensorConfig {
         // Rays that all leave the sensor's origin share one set of candidate lists, unless
         // the world has so much in range that building them costs more than walking the grid.
         let mut fan = std::mem::take(&mut tracer.fan);
-        let sectors = (std::f64::consts::TAU / self.resolution / RAYS_PER_SECTOR).round();
-        let fan_ok = !side_beams
-            && world.fan(
-                pose.position(),
-                self.range_max,
-                sectors.clamp(8.0, 4096.0) as usize,
-                n / PARTS_PER_RAY_FOR_FAN,
-                &mut fan,
-            );
+        let fan_ok = !side_beams && self.scan_fan(world, pose, n, &mut fan);
         let fan_ref = fan_ok.then_some(&fan);
         let trace = |tracer: &mut Tracer, i: usize| {
             let (az, _) = out.angles(i);
@@ -371,6 +363,25 @@ impl SensorConfig {
             out.beams.push(*beam);
         }
         out
+    }
+
+    /// Builds in `fan` the candidate lists of a scan of `rays` rays from `pose`; `false` when
+    /// the world has too much in range for them to pay (see [`World::fan`]).
+    pub(crate) fn scan_fan(
+        &self,
+        world: &World,
+        pose: &Pose,
+        rays: usize,
+        fan: &mut crate::world::Fan,
+    ) -> bool {
+        let sectors = (std::f64::consts::TAU / self.resolution / RAYS_PER_SECTOR).round();
+        world.fan(
+            pose.position(),
+            self.range_max,
+            sectors.clamp(8.0, 4096.0) as usize,
+            rays / PARTS_PER_RAY_FOR_FAN,
+            fan,
+        )
     }
 
     /// A true range turned into the reading: noise, bin quantisation, `±inf` rules.

@@ -10,7 +10,7 @@ use super::{
     with_pool_tracer,
 };
 use crate::pose::Pose;
-use crate::world::{Band, MaterialTable, World};
+use crate::world::{Band, Fan, MaterialTable, World};
 
 /// One azimuth's answer: its range before noise, how and on what it ended, which side beam
 /// answered, and the echoes reported beside it.
@@ -38,11 +38,21 @@ impl SensorConfig {
         assert_eq!(draws.0.len(), n, "draws of another sensor");
         let beam = self.signal.beam(self.side_offset());
         let angle_min = self.angle_min();
+        // Beam rays that all leave the sensor's origin share one set of candidate lists.
+        let mut fan = std::mem::take(&mut tracer.fan);
+        let one_origin = beam.iter().all(|b| b.lateral == 0.0);
+        let fan_ok = one_origin && self.scan_fan(world, pose, n * beam.len(), &mut fan);
+        let fan_ref = fan_ok.then_some(&fan);
+        // Per plane, each beam ray's elevation as its sine and cosine.
+        let planes: Vec<Vec<(f64, f64)>> = (self.elevations.iter())
+            .map(|el| beam.iter().map(|b| (el + b.d_el).sin_cos()).collect())
+            .collect();
         let answer = |tracer: &mut Tracer, i: usize| {
             let az = angle_min + (i % azimuths) as f64 * self.resolution;
-            let el = self.elevations[i / azimuths];
+            let el = &planes[i / azimuths];
             let select = draws.1.get(i).copied();
-            self.answer(world, pose, az, el, &beam, draws.0[i].0, select, tracer)
+            let side = draws.0[i].0;
+            self.answer(world, fan_ref, pose, az, el, &beam, side, select, tracer)
         };
         let answers: Vec<Answer> = if n * beam.len() >= parallel_min {
             (0..n)
@@ -53,6 +63,7 @@ impl SensorConfig {
         } else {
             (0..n).map(|i| answer(tracer, i)).collect()
         };
+        tracer.fan = fan;
         let all = self.signal.return_mode == ReturnMode::All;
         let mut out = self.empty_scan(pose, stamp);
         for (a, (_, noise)) in answers.into_iter().zip(&draws.0) {
@@ -76,9 +87,10 @@ impl SensorConfig {
     fn answer(
         &self,
         world: &World,
+        fan: Option<&Fan>,
         pose: &Pose,
         az: f64,
-        el: f64,
+        el_sin_cos: &[(f64, f64)],
         beam: &[BeamRay],
         side: Beam,
         select: Option<f64>,
@@ -86,16 +98,24 @@ impl SensorConfig {
     ) -> Answer {
         let sig = &self.signal;
         let model = sig.echo_model();
-        let mut echoes: Vec<Echo> = Vec::new();
+        // The tracer's buffers, lent for this azimuth and given back at the end.
+        let mut echoes = std::mem::take(&mut tracer.beam_echoes);
+        echoes.clear();
         // Per beam ray: where its echoes start, and its first incidence cosine.
-        let mut spans: Vec<(usize, f64)> = Vec::with_capacity(beam.len() + 1);
-        for b in beam {
-            let ray = beam_ray(pose, az + b.d_az, (el + b.d_el).sin_cos(), b.lateral);
+        let mut spans = std::mem::take(&mut tracer.beam_spans);
+        spans.clear();
+        for (b, &el) in beam.iter().zip(el_sin_cos) {
+            let ray = beam_ray(pose, az + b.d_az, el, b.lateral);
             let start = echoes.len();
-            let cos =
-                tracer
-                    .echo
-                    .echoes(world, &ray, b.weight, self.range_max, &model, &mut echoes);
+            let (w, max) = (b.weight, self.range_max);
+            let cos = match fan {
+                Some(fan) => {
+                    let heading = pose.yaw + az + b.d_az;
+                    let e = &mut tracer.echo;
+                    e.echoes_in_fan(world, fan, heading, &ray, w, max, &model, &mut echoes)
+                }
+                None => tracer.echo.echoes(world, &ray, w, max, &model, &mut echoes),
+            };
             // Only echoes a receiver can tell from noise count; each ray's by range.
             let mut k = start;
             for j in start..echoes.len() {
@@ -168,11 +188,14 @@ impl SensorConfig {
         } else {
             Vec::new()
         };
+        let chosen_beam = beam_of(chosen);
+        tracer.beam_echoes = echoes;
+        tracer.beam_spans = spans;
         Answer {
             range,
             kind,
             material,
-            beam: beam_of(chosen),
+            beam: chosen_beam,
             echoes: kept,
         }
     }

@@ -63,6 +63,10 @@ pub struct Tracer {
     active: Vec<Active>,
     /// The echo walk's buffers, for sensors with a signal model.
     pub(crate) echo: super::echo::EchoTracer,
+    /// One azimuth's echoes of all its beam rays (multi-echo scans).
+    pub(crate) beam_echoes: Vec<super::echo::Echo>,
+    /// Per beam ray, where its echoes start in `beam_echoes` and its first incidence cosine.
+    pub(crate) beam_spans: Vec<(usize, f64)>,
 }
 
 impl Tracer {

@@ -281,6 +281,8 @@ pub struct World {
     ground: MaterialId,
     /// Whether some object is an aerosol to a laser (§7.6).
     laser_aerosols: bool,
+    /// Per material, the one-way dB a radar ray loses crossing its surface, 10·log10(1/(1−ρ)).
+    transmission_db: Vec<f64>,
 }
 
 impl std::fmt::Debug for World {
@@ -335,8 +337,20 @@ impl World {
         let laser_aerosols = objects
             .iter()
             .any(|o| materials.get(o.material).laser_aerosol());
+        let transmission_db = materials
+            .iter()
+            .map(|(_, m)| {
+                let rho = m.radar_reflectivity;
+                if rho > 0.0 && rho < 1.0 {
+                    -10.0 * (1.0 - rho).log10()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         Self {
             laser_aerosols,
+            transmission_db,
             materials,
             objects,
             aabbs,
@@ -346,6 +360,12 @@ impl World {
             grid,
             ground,
         }
+    }
+
+    /// The one-way loss, dB, of a radar ray entering material `id` through its surface:
+    /// 10·log10(1/(1−ρ)) for a reflectivity ρ in (0, 1), else 0 (DESIGN §7.2).
+    pub fn radar_transmission_db(&self, id: MaterialId) -> f64 {
+        self.transmission_db[usize::from(id.0)]
     }
 
     /// Whether some object is an aerosol a laser may return from (DESIGN §7.6).
