@@ -2,11 +2,11 @@
 //! Oxford Radar RobotCar layout, a Cartesian view and detections.
 
 use std::fmt::Write as _;
-use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use radarnav::record::write_whole;
 use radarnav::scenario::MountedSensor;
 use radarnav::sensor::Tracer;
 use radarnav::sensor::cfar::{Detector, detect};
@@ -16,13 +16,6 @@ use rand_chacha::ChaCha8Rng;
 
 /// Pixels across the Cartesian view.
 const CART_PIXELS: usize = 801;
-
-/// Writes `path` whole or not at all: to a temporary name, then renamed.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension("partial");
-    fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-}
 
 /// Writes `echoes.csv` for a multi-echo scan and, for a sensor with a power image,
 /// `polar.png`, `radar.timestamps`, `cartesian.png` and `detections.csv`. Returns the names
@@ -58,7 +51,7 @@ pub fn write_signal_outputs(
                 )?;
             }
         }
-        write_atomic(&out.join("echoes.csv"), csv.as_bytes())?;
+        write_whole(&out.join("echoes.csv"), csv.as_bytes())?;
         written.push("echoes.csv".to_owned());
     }
     let Some(im) = mounted.config.signal.image else {
@@ -78,8 +71,8 @@ pub fn write_signal_outputs(
     let ms = started.elapsed().as_secs_f64() * 1e3;
     let mut png = Vec::new();
     img.write_png(&mut png)?;
-    write_atomic(&out.join("polar.png"), &png)?;
-    write_atomic(
+    write_whole(&out.join("polar.png"), &png)?;
+    write_whole(
         &out.join("radar.timestamps"),
         img.timestamps_line().as_bytes(),
     )?;
@@ -101,7 +94,7 @@ pub fn write_signal_outputs(
         CART_PIXELS,
         &img.cartesian(CART_PIXELS, mpp),
     )?;
-    write_atomic(&out.join("cartesian.png"), &cart)?;
+    write_whole(&out.join("cartesian.png"), &cart)?;
     let mut csv = String::from("detector,row,azimuth_deg,bin,range_m,power\n");
     for (name, d) in [
         ("ca_cfar", Detector::CA_CFAR),
@@ -119,7 +112,7 @@ pub fn write_signal_outputs(
             )?;
         }
     }
-    write_atomic(&out.join("detections.csv"), csv.as_bytes())?;
+    write_whole(&out.join("detections.csv"), csv.as_bytes())?;
     written.extend(
         [
             "polar.png",

@@ -174,8 +174,9 @@ fn create(path: &Path) -> Result<Out, RecordError> {
         })
 }
 
-/// Writes `path` whole or not at all: to a temporary name, then renamed.
-fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
+/// Writes `path` whole or not at all: to a temporary name beside it (`<name>.partial`), then
+/// renamed.
+pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".partial");
     let tmp = PathBuf::from(tmp);
