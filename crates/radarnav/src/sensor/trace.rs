@@ -205,16 +205,21 @@ fn walk(
         let entry = intervals.peek(t_exit.min(t_max).min(spent_by));
         let t_entry = entry.map_or(f64::INFINITY, |iv| iv.t_in.max(0.0));
         let t_next = t_entry.min(t_exit).min(t_max);
-        let kappa: f64 = active.iter().map(|a| a.3).sum();
-        let t_spent = if alpha > 0.0 {
-            t + budget / alpha
+        // Aerosols only where they are modelled: the thesis walk pays nothing for them.
+        let kappa: f64 = if optical_depth.is_some() {
+            active.iter().map(|a| a.3).sum()
         } else {
-            f64::INFINITY
+            0.0
         };
         if kappa > 0.0 {
             // The particles return the ray before the segment ends and before the budget is
             // spent: the laser sees the aerosol as a surface there.
             let t_particle = t + to_particle / kappa;
+            let t_spent = if alpha > 0.0 {
+                t + budget / alpha
+            } else {
+                f64::INFINITY
+            };
             if t_particle < t_next && t_particle < t_spent {
                 let densest = active.iter().max_by(|a, b| a.3.total_cmp(&b.3));
                 return Return {
@@ -238,7 +243,7 @@ fn walk(
                 }
                 let densest = active.iter().max_by(|a, b| a.1.total_cmp(&b.1));
                 return Return {
-                    range: t_spent,
+                    range: t + budget / alpha,
                     kind: HitKind::Exhausted,
                     material: densest.map(|a| a.2),
                 };
