@@ -2,6 +2,7 @@
 
 mod bench_cmd;
 mod compare_cmd;
+mod nav_suite_cmd;
 mod run_cmd;
 mod signal_cmd;
 mod signal_demo;
@@ -15,7 +16,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use radarnav::demo::{result_figure, share_past_foliage, thesis_experiment};
 use radarnav::render::{Figure, save_png};
-use radarnav::scenario::BUILTIN_SCENARIOS;
+use radarnav::scenario::{BUILTIN_SCENARIOS, NAV_SUITE};
 use radarnav::sensor::{PRESETS, Tracer};
 use radarnav::{Pose, Scan, Scenario};
 use rand::SeedableRng;
@@ -167,6 +168,30 @@ enum Command {
         #[arg(long, default_value = "out")]
         out: PathBuf,
     },
+    /// Navigation trials: each map's Bug mission with both algorithms, both sensors (radar,
+    /// laser), both poses (truth, odometry) and several seeds, each run judged against what
+    /// the map's geometry implies (outcome, no bump, the classic path bound). Prints the pass
+    /// table and the failed runs.
+    NavSuite {
+        /// Scenario files, built-in names or directories of .toml files (default: the
+        /// built-in trial maps, `radarnav scenarios` lists them as nav/...).
+        scenarios: Vec<String>,
+        /// Seeds 1..=N per configuration.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Algorithms, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "bug1,bug2")]
+        algorithms: Vec<String>,
+        /// Sensors the bumpers read, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "radar,laser")]
+        sensors: Vec<String>,
+        /// Poses navigation believes, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "truth,odometry")]
+        poses: Vec<String>,
+        /// Write nav_suite.csv and nav_suite.json here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Time scans of every sensor of a scenario's first robot; prints rays per second and per
     /// CPU-second. With --sim, time a whole simulated run instead; with --export and --rays,
     /// the scene and rays of the peers benchmark (bench/peers.py).
@@ -240,10 +265,10 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo { out, seed, repeats } => demo(&out, seed, repeats),
         Command::Scenarios => {
-            for (name, _) in BUILTIN_SCENARIOS {
+            for (name, _) in BUILTIN_SCENARIOS.iter().chain(NAV_SUITE) {
                 let s = Scenario::builtin(name).context("built-in scenario")?;
                 say!(
-                    "{name:<14} {:>4} objects  {}",
+                    "{name:<16} {:>4} objects  {}",
                     s.world.objects().len(),
                     s.description
                 );
@@ -352,6 +377,24 @@ fn run(cli: Cli) -> Result<()> {
                 out: &out,
             })
         }
+        Command::NavSuite {
+            scenarios,
+            seeds,
+            algorithms,
+            sensors,
+            poses,
+            out,
+        } => nav_suite_cmd::nav_suite(
+            &nav_suite_cmd::SuiteArgs {
+                scenarios: &scenarios,
+                seeds,
+                algorithms: &algorithms,
+                sensors: &sensors,
+                poses: &poses,
+                out: out.as_deref(),
+            },
+            load,
+        ),
         Command::Bench {
             scenario,
             scans,

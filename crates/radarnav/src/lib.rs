@@ -25,6 +25,7 @@ pub mod render;
 pub mod scenario;
 pub mod sensor;
 pub mod sim;
+pub mod trials;
 pub mod vehicle;
 pub mod world;
 

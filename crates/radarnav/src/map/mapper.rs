@@ -18,7 +18,9 @@ use crate::sim::{Observer, ScanEvent, Step};
 use crate::vehicle::VehicleSpec;
 
 /// Which robot pose the mapper uses to place scans.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum PoseSource {
     /// The true pose: mapping with known poses, as the thesis did with USARSim's ground-truth

@@ -30,6 +30,7 @@ use crate::map::PoseSource;
 use crate::pose::wrap_angle;
 use crate::sim::{ControlInput, Decision, Ending};
 use crate::vehicle::DriveCommand;
+use crate::vehicle::VehicleSpec;
 
 /// Heading error beyond which the robot turns on the spot, rad (30°).
 const TURN_IN_PLACE: f64 = 0.52;
@@ -40,9 +41,20 @@ const TURN_RATE: f64 = 0.8;
 /// How much closer than the hit point a Bug2 leave point must be, m: crossings at the hit
 /// point itself do not count.
 const CLOSER_BY: f64 = 0.2;
+/// Smallest gap kept between the robot's body (its half-diagonal) and the bumpers' safety
+/// distance when a standoff retry shrinks it, m.
+pub const MIN_CLEARANCE: f64 = 0.15;
+/// Each standoff retry keeps this share of the previous safety distance.
+const RETRY_FACTOR: f64 = 0.6;
+/// Spacing of the followed path's remembered samples, m.
+const TRAIL_STEP: f64 = 0.2;
+/// Two passes whose headings differ by less than this go the same way round, rad (60°).
+const SAME_WAY: f64 = 1.05;
+/// Speed of the final approach to a goal inside the standoff distance, m/s.
+const APPROACH_SPEED: f64 = 0.2;
 
 /// Which Bug.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BugAlgorithm {
     /// Circumnavigate, then leave at the closest point.
@@ -105,6 +117,24 @@ pub struct BugReport {
     pub goal_distance: f64,
     /// Why the run ended, in words.
     pub reason: String,
+    /// Standoff retries: each time a `no_path` condition was met with a safety distance above
+    /// the floor, the safety distance tried next, where and why.
+    pub retries: Vec<RetryReport>,
+    /// Safety distance of the bumpers at the end, m.
+    pub safety: f64,
+    /// Loops closed while following (back at the hit point, or on the path already followed).
+    pub loops: usize,
+}
+
+/// One standoff retry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct RetryReport {
+    /// Where the robot was (believed), m.
+    pub at: [f64; 2],
+    /// The `no_path` condition that was met.
+    pub after: String,
+    /// The new safety distance, m.
+    pub safety: f64,
 }
 
 #[derive(Clone, Debug)]
@@ -134,6 +164,33 @@ struct Boundary {
     away_from_closest: bool,
     /// Bug2: within the m-line tolerance at the last call.
     on_mline: bool,
+    /// The followed path: (position, heading, distance followed), every [`TRAIL_STEP`].
+    trail: Vec<(DVec2, f64, f64)>,
+}
+
+impl Boundary {
+    /// Whether the robot at `p` heading `yaw` has closed a loop: back within `tol` of the hit
+    /// point after having been away, or within `tol` of its own followed path, going the same
+    /// way, at least `min_cycle` metres of following ago. The second catches a loop that
+    /// passes the hit point wide (the hit point lies where the bumper first tripped, nearer
+    /// the obstacle than the settled path; odometry drifts) and a loop on a boundary the
+    /// follower took up instead of the one it hit.
+    fn closes_loop(&mut self, p: DVec2, yaw: f64, tol: f64, min_cycle: f64) -> bool {
+        if self
+            .trail
+            .last()
+            .is_none_or(|l| self.travelled - l.2 >= TRAIL_STEP)
+        {
+            self.trail.push((p, yaw, self.travelled));
+        }
+        let old = self.travelled - min_cycle;
+        (self.away && (p - self.hit).length() <= tol)
+            || self
+                .trail
+                .iter()
+                .take_while(|s| s.2 <= old)
+                .any(|s| (s.0 - p).length() <= tol && wrap_angle(s.1 - yaw).abs() <= SAME_WAY)
+    }
 }
 
 /// A Bug1 or Bug2 controller.
@@ -146,7 +203,8 @@ pub struct BugController {
     mode: Mode,
     start: Option<DVec2>,
     last: Option<DVec2>,
-    last_leave: Option<DVec2>,
+    /// Bug1: the last leave point and its distance to the goal.
+    last_leave: Option<(DVec2, f64)>,
     report: BugReport,
 }
 
@@ -180,6 +238,33 @@ impl BugController {
     fn end(&mut self, ending: Ending, reason: &str) -> Decision {
         self.report.reason = reason.to_owned();
         Decision::Finished(ending)
+    }
+
+    /// A `no_path` condition was met at `p`. Before believing it, retry from here with the
+    /// bumpers' safety distance shrunk step by step down to the body plus [`MIN_CLEARANCE`]:
+    /// a way narrower than twice the standoff (a doorway, a gap between a hedge and a wall)
+    /// looks closed at the standoff and open nearer in.
+    fn no_path(&mut self, reason: &str, p: DVec2, vehicle: &VehicleSpec) -> Decision {
+        let safety = self.bumpers.config().safety_for(vehicle);
+        let floor = 0.5 * vehicle.length.hypot(vehicle.width) + MIN_CLEARANCE;
+        if safety <= floor + 1e-9 {
+            return self.end(Ending::NoPath, reason);
+        }
+        let next = (safety * RETRY_FACTOR).max(floor);
+        self.report.retries.push(RetryReport {
+            at: p.to_array(),
+            after: reason.to_owned(),
+            safety: next,
+        });
+        self.report.safety = next;
+        self.bumpers = BumperSensor::new(BumperConfig {
+            safety: Some(next),
+            ..self.bumpers.config().clone()
+        });
+        self.mode = Mode::ToGoal;
+        self.start = Some(p);
+        self.last_leave = None;
+        Decision::Drive(DriveCommand::STOP)
     }
 
     /// The signed distance of `p` to the m-line and whether its foot lies between start and
@@ -216,32 +301,63 @@ impl Behaviour for BugController {
         let goal = self.mission.goal;
         let goal_dist = (goal - p).length();
         self.report.goal_distance = goal_dist;
+        let vehicle = input.vehicle;
+        if self.report.safety == 0.0 {
+            self.report.safety = self.bumpers.config().safety_for(vehicle);
+        }
         if goal_dist <= self.mission.tolerance {
             return self.end(Ending::Reached, "goal reached");
         }
         let dt = 1.0 / self.rate_hz;
-        let radius = self.bumpers.follow_radius(input.vehicle);
+        let radius = self.bumpers.follow_radius(vehicle);
+        let reach = self.bumpers.reach(vehicle);
         let heading = wrap_angle((goal - p).to_angle() - pose.yaw);
         let Some(b) = self.bumpers.update(input).cloned() else {
             // No scan yet: wait for the bumpers.
             return Decision::Drive(DriveCommand::STOP);
         };
-        // Hit: the bumper toward the goal trips. Leaving needs more: nothing at all in that
-        // sector up to the band's far edge.
+        let half_width = vehicle.width / 2.0 + MIN_CLEARANCE;
+        // A goal inside the standoff of an obstacle beyond it: the bumpers trip before the
+        // goal is reached, but the body's corridor to the goal (and a margin past it) is free.
+        let final_approach = goal_dist <= reach + vehicle.length
+            && heading.abs() <= TURN_IN_PLACE
+            && b.corridor_free(
+                heading,
+                goal_dist + vehicle.length / 2.0 + MIN_CLEARANCE,
+                half_width,
+            );
+        if final_approach && !bumped {
+            if let Mode::Follow(_) = self.mode {
+                self.report.leave_points.push(p.to_array());
+                self.mode = Mode::ToGoal;
+            }
+            let omega = (K_HEADING * heading).clamp(-TURN_RATE, TURN_RATE);
+            let v = goal_dist.min(APPROACH_SPEED) * heading.cos();
+            return Decision::Drive(DriveCommand::twist(v, omega));
+        }
+        // Hit: the bumper toward the goal trips. Leaving needs more: the body's corridor
+        // toward the goal free up to the band's far edge (or the goal).
         let hit = bumped || b.toward(heading) != BumperState::Clear;
-        let goal_blocked = b.nearest_toward(heading) <= self.bumpers.reach(input.vehicle);
+        let goal_blocked = !b.corridor_free(heading, goal_dist.min(reach), half_width)
+            || b.toward(heading) == BumperState::TooClose;
         let tol = self.mission.loop_tolerance;
+        // The smallest loop round an obstacle: a circle of the follow radius, and some.
+        let min_cycle = std::f64::consts::TAU * radius + 2.0 * tol;
         let (side, within) = self.mline(p);
         let prev_side = prev.map_or(side, |q| self.mline(q).0);
         match &mut self.mode {
             Mode::ToGoal => {
                 if hit && heading.abs() <= TURN_IN_PLACE {
+                    // Bug1: hitting again before getting a standoff nearer the goal than the
+                    // leave point is the same obstacle in the way (a notch, a concave side).
                     if self.mission.algorithm == BugAlgorithm::Bug1
-                        && self.last_leave.is_some_and(|l| (p - l).length() <= tol)
+                        && let Some((_, d)) = self.last_leave
+                        && goal_dist > d - radius
                     {
-                        return self.end(
-                            Ending::NoPath,
+                        return self.no_path(
                             "bug1: the line from the leave point toward the goal re-enters the obstacle",
+                            p,
+                            vehicle,
                         );
                     }
                     self.report.hit_points.push(p.to_array());
@@ -259,6 +375,7 @@ impl Behaviour for BugController {
                         circled: false,
                         away_from_closest: false,
                         on_mline: true,
+                        trail: Vec::new(),
                     });
                     return Decision::Drive(self.follower.command(&b, dt, radius));
                 }
@@ -275,20 +392,23 @@ impl Behaviour for BugController {
                     self.follower.bumped();
                 }
                 self.report.boundary_distance += step;
+                bd.travelled += step;
                 let from_hit = (p - bd.hit).length();
                 if from_hit > 2.0 * tol {
                     bd.away = true;
                 }
-                let back_at_hit = bd.away && from_hit <= tol;
+                let looped = !bd.circled && bd.closes_loop(p, pose.yaw, tol, min_cycle);
+                if looped {
+                    self.report.loops += 1;
+                }
                 match self.mission.algorithm {
                     BugAlgorithm::Bug1 => {
-                        bd.travelled += step;
                         // Points met while turning away at the hit point are not on the
                         // followed path: candidates start once the robot has left it.
                         if !bd.circled && bd.away && goal_dist < bd.closest.1 {
                             bd.closest = (p, goal_dist, bd.travelled);
                         }
-                        if back_at_hit && !bd.circled {
+                        if looped {
                             bd.circled = true;
                             // Going on reaches the closest point after `closest.2`, going
                             // back after the rest of the loop: turn about when that is shorter.
@@ -329,13 +449,14 @@ impl Behaviour for BugController {
                                 || bd.travelled >= bd.leave_at;
                             if at_closest {
                                 if goal_blocked {
-                                    return self.end(
-                                        Ending::NoPath,
+                                    return self.no_path(
                                         "bug1: the way toward the goal from the closest point is blocked by the same obstacle",
+                                        p,
+                                        vehicle,
                                     );
                                 }
                                 self.report.leave_points.push(p.to_array());
-                                self.last_leave = Some(p);
+                                self.last_leave = Some((p, goal_dist));
                                 self.mode = Mode::ToGoal;
                                 return Decision::Drive(DriveCommand::STOP);
                             }
@@ -356,10 +477,11 @@ impl Behaviour for BugController {
                                 return Decision::Drive(DriveCommand::STOP);
                             }
                         }
-                        if back_at_hit {
-                            return self.end(
-                                Ending::NoPath,
+                        if looped {
+                            return self.no_path(
                                 "bug2: back at the hit point without a closer m-line crossing",
+                                p,
+                                vehicle,
                             );
                         }
                     }

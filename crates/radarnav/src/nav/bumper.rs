@@ -24,8 +24,10 @@
 use std::f64::consts::TAU;
 use std::fmt;
 
+use glam::DVec2;
+
 use crate::pose::{Pose, wrap_angle};
-use crate::sensor::Scan;
+use crate::sensor::{ReturnMode, Scan, SensorConfig, SensorKind};
 use crate::sim::ControlInput;
 use crate::vehicle::VehicleSpec;
 
@@ -106,6 +108,20 @@ pub struct BumperConfig {
     pub sensor: Option<String>,
 }
 
+/// Makes a radar feeding bumpers report first echoes: in the thesis' return mode its range is
+/// where the penetration budget ran out, deep inside foliage or past a hedge it crosses whole,
+/// so a robot steering by it drives into what it sees through. In `all` mode the range is the
+/// first echo (the foliage's surface) and the later echoes stay in the scan for the maps.
+/// Other sensors and modes are left alone. Returns whether it changed `config`.
+pub fn read_first_echoes(config: &mut SensorConfig) -> bool {
+    let switch =
+        config.kind == SensorKind::Radar && config.signal.return_mode == ReturnMode::Thesis;
+    if switch {
+        config.signal.return_mode = ReturnMode::All;
+    }
+    switch
+}
+
 /// Default safety distance in vehicle lengths (DESIGN §6: 2–3).
 pub const DEFAULT_SAFETY_LENGTHS: f64 = 2.5;
 
@@ -164,6 +180,9 @@ impl BumperConfig {
 pub struct Bumpers {
     states: Vec<BumperState>,
     nearest: Vec<f64>,
+    /// Every return in the robot frame (below-minimum ranges at the centre), for the
+    /// corridor checks.
+    points: Vec<DVec2>,
 }
 
 impl Bumpers {
@@ -182,6 +201,7 @@ impl Bumpers {
         let mut close = vec![0usize; sectors];
         let mut in_band = vec![0usize; sectors];
         let mut nearest = vec![f64::INFINITY; sectors];
+        let mut points = Vec::new();
         for (i, &r) in scan.ranges.iter().enumerate() {
             let dir = mount.yaw + scan.angles(i).0;
             let (angle, dist) = if r.is_finite() {
@@ -194,6 +214,9 @@ impl Bumpers {
             } else {
                 (dir, f64::INFINITY)
             };
+            if dist.is_finite() {
+                points.push(DVec2::from_angle(angle) * dist);
+            }
             let k = sector_index(angle, width, sectors);
             rays[k] += 1;
             nearest[k] = nearest[k].min(dist);
@@ -214,7 +237,22 @@ impl Bumpers {
                 }
             })
             .collect();
-        Self { states, nearest }
+        Self {
+            states,
+            nearest,
+            points,
+        }
+    }
+
+    /// Whether no return lies in the corridor of half-width `half_width` from the robot's
+    /// centre along the robot-frame direction `angle`, up to `length` metres: the way is open
+    /// for the robot's body, whatever the sectors say.
+    pub fn corridor_free(&self, angle: f64, length: f64, half_width: f64) -> bool {
+        let u = DVec2::from_angle(angle);
+        !self.points.iter().any(|p| {
+            let along = p.dot(u);
+            (0.0..=length).contains(&along) && u.perp_dot(*p).abs() <= half_width
+        })
     }
 
     /// Number of sectors.

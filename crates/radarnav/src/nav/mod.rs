@@ -9,7 +9,7 @@ pub mod wall_follow;
 mod waypoints;
 
 pub use bug::{BugAlgorithm, BugController, BugMission, BugReport};
-pub use bumper::{BumperConfig, BumperRule, BumperSensor, BumperState, Bumpers};
+pub use bumper::{BumperConfig, BumperRule, BumperSensor, BumperState, Bumpers, read_first_echoes};
 pub use explore::{ExploreController, ExploreMission, Strategy};
 pub use teleop::TeleopController;
 pub use wall_follow::{FollowRule, Side, WallFollower};

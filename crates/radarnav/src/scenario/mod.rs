@@ -24,7 +24,7 @@
 mod builtin;
 pub mod spec;
 
-pub use builtin::{BUILTIN_SCENARIOS, builtin_source};
+pub use builtin::{BUILTIN_SCENARIOS, NAV_SUITE, builtin_source};
 
 use glam::{DVec2, DVec3};
 use std::ops::Range;
@@ -217,6 +217,9 @@ impl Scenario {
             .as_ref()
             .map(|m| build_mission(&ctx, m, &robots))
             .transpose()?;
+        if let Some(m) = &mission {
+            bumpers_on_first_echoes(m, &mut robots);
+        }
         Ok(Scenario {
             name: name.to_owned(),
             description: spec.description,
@@ -247,6 +250,26 @@ impl Scenario {
             Some(n) => self.robots.iter().find(|r| r.name == n),
             None => self.robots.first(),
         }
+    }
+}
+
+/// A Bug or exploration mission's bumpers read first echoes (DESIGN §6): its bumper radar,
+/// if it is in the thesis' return mode, is switched to `all` (range = first echo, every echo
+/// beside it for the maps), so foliage it sees through is an obstacle to it.
+fn bumpers_on_first_echoes(mission: &Mission, robots: &mut [Robot]) {
+    let bumpers = match &mission.kind {
+        MissionKind::Bug(b) => &b.bumpers,
+        MissionKind::Explore(e) => &e.bumpers,
+        _ => return,
+    };
+    let robot = match &mission.robot {
+        Some(n) => robots.iter_mut().find(|r| &r.name == n),
+        None => robots.first_mut(),
+    };
+    if let Some(r) = robot
+        && let Some(i) = bumpers.sensor_index(r.sensors.iter().map(|s| s.name.as_str()))
+    {
+        crate::nav::read_first_echoes(&mut r.sensors[i].config);
     }
 }
 

@@ -15,7 +15,7 @@ fn err(src: &str) -> ScenarioError {
 
 #[test]
 fn builtins_parse_and_have_robots_with_radar_and_laser() {
-    for (name, _) in BUILTIN_SCENARIOS {
+    for (name, _) in BUILTIN_SCENARIOS.iter().chain(NAV_SUITE) {
         let s = Scenario::builtin(name).unwrap();
         assert!(!s.description.is_empty(), "{name}");
         let robot = s.robot(None).unwrap();

@@ -577,6 +577,16 @@ impl World {
     /// The first object (lowest index) that a robot cannot drive through and that overlaps
     /// `body`; traversable materials (smoke, dust, the ground) never block.
     pub fn blocking_object(&self, body: &OrientedBox) -> Option<usize> {
+        self.overlapping_object(body, |m| !m.traversable)
+    }
+
+    /// The first object (lowest index) whose material satisfies `select` and that overlaps
+    /// `body`.
+    pub fn overlapping_object(
+        &self,
+        body: &OrientedBox,
+        select: impl Fn(&Material) -> bool,
+    ) -> Option<usize> {
         let (lo, hi) = body.aabb();
         let pad = self.grid.pad();
         self.grid
@@ -587,7 +597,7 @@ impl World {
                 let o = &self.objects[i];
                 a.cmple(hi + pad).all()
                     && (lo - pad).cmple(b).all()
-                    && !self.materials.get(o.material).traversable
+                    && select(self.materials.get(o.material))
                     && o.shape.overlaps_box(body)
             })
             .min()

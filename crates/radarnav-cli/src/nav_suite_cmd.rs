@@ -1,0 +1,163 @@
+//! `radarnav nav-suite`: Bug missions on maps nobody tuned the navigation to, both algorithms
+//! × both sensors × both poses × seeds, each run judged against its map's geometry; prints
+//! the pass table and writes every run to nav_suite.csv / nav_suite.json.
+
+use std::fmt::Write as _;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use radarnav::Scenario;
+use radarnav::map::PoseSource;
+use radarnav::nav::BugAlgorithm;
+use radarnav::record::write_whole;
+use radarnav::scenario::NAV_SUITE;
+use radarnav::trials::{SensorClass, Trial, TrialMap, failures, grid, pass_table, run_all};
+
+/// What `nav-suite` was asked.
+pub struct SuiteArgs<'a> {
+    /// Scenario files or built-in names, or directories of .toml files; none: the built-in
+    /// trial maps.
+    pub scenarios: &'a [String],
+    pub seeds: u64,
+    pub algorithms: &'a [String],
+    pub sensors: &'a [String],
+    pub poses: &'a [String],
+    pub out: Option<&'a Path>,
+}
+
+/// `radarnav nav-suite`.
+pub fn nav_suite(a: &SuiteArgs<'_>, load: impl Fn(&str) -> Result<Scenario>) -> Result<()> {
+    if a.seeds == 0 {
+        bail!("--seeds must be at least 1");
+    }
+    let mut scenarios = Vec::new();
+    if a.scenarios.is_empty() {
+        for (name, _) in NAV_SUITE {
+            scenarios.push(load(name)?);
+        }
+    }
+    for arg in a.scenarios {
+        let path = Path::new(arg);
+        if path.is_dir() {
+            let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+                .with_context(|| format!("reading directory {arg}"))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .collect();
+            files.sort();
+            if files.is_empty() {
+                bail!("{arg}: no .toml scenario files in this directory");
+            }
+            for f in files {
+                scenarios.push(load(&f.to_string_lossy())?);
+            }
+        } else {
+            scenarios.push(load(arg)?);
+        }
+    }
+    let maps = scenarios
+        .into_iter()
+        .map(|s| TrialMap::new(s).map_err(anyhow::Error::from))
+        .collect::<Result<Vec<_>>>()?;
+    let algorithms = a
+        .algorithms
+        .iter()
+        .map(|n| match n.as_str() {
+            "bug1" => Ok(BugAlgorithm::Bug1),
+            "bug2" => Ok(BugAlgorithm::Bug2),
+            _ => bail!("--algorithms: unknown `{n}`; known: bug1, bug2"),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let sensors = a
+        .sensors
+        .iter()
+        .map(|n| match n.as_str() {
+            "radar" => Ok(SensorClass::Radar),
+            "laser" => Ok(SensorClass::Laser),
+            _ => bail!("--sensors: unknown `{n}`; known: radar, laser"),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let poses = a
+        .poses
+        .iter()
+        .map(|n| {
+            PoseSource::parse(n)
+                .with_context(|| format!("--poses: unknown `{n}`; known: truth, odometry"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let trials: Vec<Trial> = grid(&algorithms, &sensors, &poses, a.seeds);
+    let total = (maps.len() * trials.len()) as u64;
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new(total)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} ({eta} left) {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let results = run_all(&maps, &trials, |r| {
+        bar.inc(1);
+        if !r.passed() {
+            bar.set_message(format!("last failure: {}", r.map));
+        }
+    })?;
+    bar.finish_and_clear();
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} maps × {} configurations: {} runs",
+        maps.len(),
+        trials.len(),
+        results.len()
+    )?;
+    write!(out, "{}", pass_table(&results))?;
+    let failed = failures(&results);
+    if !failed.is_empty() {
+        writeln!(out, "\nfailed runs:")?;
+        for f in &failed {
+            writeln!(out, "  {f}")?;
+        }
+    }
+    if let Some(dir) = a.out {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating output directory {}", dir.display()))?;
+        let mut csv = String::from(
+            "map,algorithm,sensor,pose,seed,expected,outcome,bumps,distance_m,bound_m,time_s,passed,faults,reason\n",
+        );
+        for r in &results {
+            let t = &r.trial;
+            let faults: Vec<String> = r
+                .faults
+                .iter()
+                .map(|f| format!("{f:?}").to_lowercase())
+                .collect();
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{:?},{:?},{},{:.3},{:.3},{:.2},{},{},\"{}\"",
+                r.map,
+                t.algorithm.as_str(),
+                t.sensor.as_str(),
+                t.pose.as_str(),
+                t.seed,
+                r.expected,
+                r.outcome,
+                r.bumps,
+                r.distance,
+                r.bound,
+                r.time,
+                r.passed(),
+                faults.join("+"),
+                r.reason.replace('"', "'")
+            );
+        }
+        let path = dir.join("nav_suite.csv");
+        write_whole(&path, csv.as_bytes())?;
+        let json = serde_json::to_vec_pretty(&results)?;
+        write_whole(&dir.join("nav_suite.json"), &json)?;
+        writeln!(out, "wrote {} and nav_suite.json", path.display())?;
+    }
+    Ok(())
+}

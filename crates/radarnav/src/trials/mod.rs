@@ -1,0 +1,417 @@
+//! Navigation trials (DESIGN §6): Bug missions on maps nobody tuned the navigation to, each
+//! run judged against what the map's geometry implies.
+//!
+//! A trial map is any scenario with a Bug mission (its goal, tolerance and bumpers; the
+//! algorithm is set per run). Each run keeps one sensor of the robot (its first radar or its
+//! first laser; a preset `radar_thesis` or `hokuyo_utm30lx` mounted like its first sensor
+//! when it has none), navigates on the true pose or on odometry, with a seed. A run
+//! **passes** when
+//! * its outcome is the one the geometry implies ([`geometry::expect`]): `reached` when the
+//!   robot's disc fits from start to goal, else `no_path` (no timeout);
+//! * it never bumped;
+//! * its true path length keeps the classic bound of its algorithm.
+//!
+//! Runs last as long as the scenario says, or longer when the bound needs it (twice the
+//! bound at cruise speed plus a minute), so a timeout means the robot was lost, not slow.
+
+pub mod geometry;
+
+use rayon::prelude::*;
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::Scenario;
+use crate::map::PoseSource;
+use crate::mission::{Mission, MissionError, MissionKind};
+use crate::nav::{BugAlgorithm, BugMission, BumperSensor, read_first_echoes};
+use crate::scenario::{MountedSensor, Robot};
+use crate::sensor::SensorKind;
+use crate::sim::{NoObserver, RunOutcome, RunSettings, SimError, Simulation};
+pub use geometry::{Expectation, SensorClass, TrialGeometry};
+
+/// Why a trial cannot run.
+#[derive(Debug, Error)]
+pub enum TrialError {
+    /// The scenario has no Bug mission.
+    #[error("scenario `{0}` has no bug1 or bug2 mission: a trial map needs a goal")]
+    NotBug(String),
+    /// The mission names a robot the scenario lacks.
+    #[error("scenario `{0}`: the mission's robot is missing")]
+    NoRobot(String),
+    /// The mission.
+    #[error(transparent)]
+    Mission(#[from] MissionError),
+    /// The simulation.
+    #[error("scenario `{0}`: {1}")]
+    Sim(String, SimError),
+}
+
+/// One run to make on a map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub struct Trial {
+    /// Bug1 or Bug2.
+    pub algorithm: BugAlgorithm,
+    /// The sensor the bumpers read.
+    pub sensor: SensorClass,
+    /// The pose navigation believes.
+    pub pose: PoseSource,
+    /// Seed.
+    pub seed: u64,
+}
+
+/// Every combination of `algorithms` × `sensors` × `poses` × seeds `1..=seeds`.
+pub fn grid(
+    algorithms: &[BugAlgorithm],
+    sensors: &[SensorClass],
+    poses: &[PoseSource],
+    seeds: u64,
+) -> Vec<Trial> {
+    let mut out = Vec::new();
+    for &algorithm in algorithms {
+        for &sensor in sensors {
+            for &pose in poses {
+                for seed in 1..=seeds {
+                    out.push(Trial {
+                        algorithm,
+                        sensor,
+                        pose,
+                        seed,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The whole suite's configurations: both algorithms × both sensors × both poses, seeds
+/// `1..=seeds`.
+pub fn full_grid(seeds: u64) -> Vec<Trial> {
+    grid(
+        &[BugAlgorithm::Bug1, BugAlgorithm::Bug2],
+        &[SensorClass::Radar, SensorClass::Laser],
+        &[PoseSource::Truth, PoseSource::Odometry],
+        seeds,
+    )
+}
+
+/// A map ready for trials: its scenario, its robot with one sensor of each class, and what
+/// its geometry implies for each class.
+pub struct TrialMap {
+    /// The scenario's name.
+    pub name: String,
+    scenario: Scenario,
+    robot: Robot,
+    bug: BugMission,
+    controller_hz: f64,
+    sensors: [MountedSensor; 2],
+    fields: [geometry::Field; 2],
+    geometries: [TrialGeometry; 2],
+    expectations: [Expectation; 2],
+}
+
+impl TrialMap {
+    /// Prepares `scenario` (a Bug mission is required).
+    pub fn new(scenario: Scenario) -> Result<Self, TrialError> {
+        let Some(Mission {
+            robot: robot_name,
+            controller_hz,
+            kind: MissionKind::Bug(bug),
+        }) = scenario.mission.clone()
+        else {
+            return Err(TrialError::NotBug(scenario.name.clone()));
+        };
+        let robot = scenario
+            .robot(robot_name.as_deref())
+            .ok_or_else(|| TrialError::NoRobot(scenario.name.clone()))?
+            .clone();
+        let pick = |kind: SensorKind, preset: &str| {
+            robot
+                .sensors
+                .iter()
+                .find(|s| s.config.kind == kind)
+                .cloned()
+                .or_else(|| robot.with_preset_mount(preset))
+                .expect("built-in preset")
+        };
+        let mut sensors = [
+            pick(SensorKind::Radar, "radar_thesis"),
+            pick(SensorKind::Laser, "hokuyo_utm30lx"),
+        ];
+        // Whichever sensor the scenario's bumpers named, each run's bumpers read this one.
+        read_first_echoes(&mut sensors[0].config);
+        let standoff = BumperSensor::new(bug.bumpers.clone()).follow_radius(robot.vehicle);
+        let v = robot.vehicle;
+        let geometries = [SensorClass::Radar, SensorClass::Laser].map(|class| TrialGeometry {
+            start: robot.start.xy(),
+            goal: bug.goal,
+            tolerance: bug.tolerance,
+            radius: 0.5 * v.length.hypot(v.width),
+            standoff,
+            height: v.height,
+            plane_z: sensors[class as usize].mount.z,
+        });
+        let fields = [SensorClass::Radar, SensorClass::Laser].map(|class| {
+            let g = &geometries[class as usize];
+            geometry::Field::new(
+                &scenario.world,
+                class,
+                g.height,
+                g.plane_z,
+                &[g.start, g.goal],
+                standoff + 1.0,
+            )
+        });
+        let expectations = [SensorClass::Radar, SensorClass::Laser]
+            .map(|c| fields[c as usize].expect(&geometries[c as usize]));
+        Ok(Self {
+            name: scenario.name.clone(),
+            scenario,
+            robot,
+            bug,
+            controller_hz,
+            sensors,
+            fields,
+            geometries,
+            expectations,
+        })
+    }
+
+    /// What the geometry implies for a robot steering by `sensor`.
+    pub fn expectation(&self, sensor: SensorClass) -> &Expectation {
+        &self.expectations[sensor as usize]
+    }
+
+    /// Runs `trial`.
+    pub fn run(&self, trial: &Trial) -> Result<TrialResult, TrialError> {
+        let e = self.expectation(trial.sensor);
+        let pick = |e: &Expectation| match trial.algorithm {
+            BugAlgorithm::Bug1 => e.bug1_bound,
+            BugAlgorithm::Bug2 => e.bug2_bound,
+        };
+        let first_bound = pick(e);
+        let mut robot = self.robot.clone();
+        robot.sensors = vec![self.sensors[trial.sensor as usize].clone()];
+        let mut bug = self.bug.clone();
+        bug.algorithm = trial.algorithm;
+        bug.pose = trial.pose;
+        bug.bumpers.sensor = None;
+        let mission = Mission {
+            robot: Some(robot.name.clone()),
+            controller_hz: self.controller_hz,
+            kind: MissionKind::Bug(bug.clone()),
+        };
+        let settings = RunSettings {
+            seed: trial.seed,
+            duration: self
+                .scenario
+                .sim
+                .duration
+                .max(2.0 * first_bound / bug.speed + 60.0),
+            ..RunSettings::of(&self.scenario)
+        };
+        let mut sim = Simulation::new(
+            &self.scenario.world,
+            &robot,
+            mission.controller(trial.seed)?,
+            settings,
+        )
+        .map_err(|err| TrialError::Sim(self.name.clone(), err))?;
+        let Ok(summary) = sim.run(&mut NoObserver);
+        // A standoff retry starts a new Bug run where it is, nearer its boundaries: the bound
+        // of the whole run is the sum of each attempt's classic bound at its own standoff.
+        let mut bound = first_bound;
+        let g = &self.geometries[trial.sensor as usize];
+        let retries = summary
+            .navigation
+            .as_ref()
+            .and_then(|n| n["retries"].as_array().cloned())
+            .unwrap_or_default();
+        for r in &retries {
+            let (Some(x), Some(y), Some(safety)) = (
+                r["at"][0].as_f64(),
+                r["at"][1].as_f64(),
+                r["safety"].as_f64(),
+            ) else {
+                continue;
+            };
+            let attempt = TrialGeometry {
+                start: glam::DVec2::new(x, y),
+                standoff: safety + bug.bumpers.band / 2.0,
+                ..*g
+            };
+            bound += pick(&self.fields[trial.sensor as usize].expect(&attempt));
+        }
+        let expected = if e.reachable {
+            RunOutcome::Reached
+        } else {
+            RunOutcome::NoPath
+        };
+        let mut faults = Vec::new();
+        if summary.outcome != expected {
+            faults.push(if summary.outcome == RunOutcome::Timeout {
+                Fault::Timeout
+            } else {
+                Fault::Outcome
+            });
+        }
+        if summary.bumps > 0 {
+            faults.push(Fault::Bumped);
+        }
+        if summary.distance > bound {
+            faults.push(Fault::OverBound);
+        }
+        Ok(TrialResult {
+            map: self.name.clone(),
+            trial: *trial,
+            expected,
+            outcome: summary.outcome,
+            bumps: summary.bumps,
+            distance: summary.distance,
+            bound,
+            attempts: 1 + retries.len(),
+            time: summary.duration,
+            faults,
+            reason: summary
+                .navigation
+                .as_ref()
+                .and_then(|n| n["reason"].as_str())
+                .unwrap_or_default()
+                .to_owned(),
+        })
+    }
+}
+
+/// Why a run failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fault {
+    /// The other outcome than the geometry implies.
+    Outcome,
+    /// Time ran out.
+    Timeout,
+    /// A move was refused by a collision.
+    Bumped,
+    /// The path was longer than the bound.
+    OverBound,
+}
+
+/// What one trial did.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrialResult {
+    /// Map name.
+    pub map: String,
+    /// The configuration.
+    pub trial: Trial,
+    /// The outcome the geometry implies.
+    pub expected: RunOutcome,
+    /// The outcome.
+    pub outcome: RunOutcome,
+    /// Bumps.
+    pub bumps: usize,
+    /// True path length, m.
+    pub distance: f64,
+    /// The algorithm's bound, m: summed over the attempts when the standoff was retried.
+    pub bound: f64,
+    /// Bug runs made: 1 plus the standoff retries.
+    pub attempts: usize,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Empty when the run passed.
+    pub faults: Vec<Fault>,
+    /// The controller's reason for ending.
+    pub reason: String,
+}
+
+impl TrialResult {
+    /// Whether the run passed.
+    pub fn passed(&self) -> bool {
+        self.faults.is_empty()
+    }
+}
+
+/// Runs every trial on every map, in parallel; `progress` is called after each run.
+pub fn run_all(
+    maps: &[TrialMap],
+    trials: &[Trial],
+    progress: impl Fn(&TrialResult) + Sync,
+) -> Result<Vec<TrialResult>, TrialError> {
+    let jobs: Vec<(&TrialMap, &Trial)> = maps
+        .iter()
+        .flat_map(|m| trials.iter().map(move |t| (m, t)))
+        .collect();
+    jobs.par_iter()
+        .map(|(m, t)| {
+            let r = m.run(t)?;
+            progress(&r);
+            Ok(r)
+        })
+        .collect()
+}
+
+/// The pass table: one row per algorithm × sensor × pose with runs, passes, the pass rate
+/// and the count of each fault; then the failed runs.
+pub fn pass_table(results: &[TrialResult]) -> String {
+    use std::collections::BTreeMap;
+    use std::fmt::Write;
+    let mut rows: BTreeMap<(BugAlgorithm, SensorClass, PoseSource), [usize; 6]> = BTreeMap::new();
+    for r in results {
+        let t = &r.trial;
+        let row = rows.entry((t.algorithm, t.sensor, t.pose)).or_default();
+        row[0] += 1;
+        row[1] += usize::from(r.passed());
+        for f in &r.faults {
+            row[2 + *f as usize] += 1;
+        }
+    }
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| algorithm | sensor | pose | runs | passed | pass % | wrong outcome | timeout | bumped | over bound |"
+    );
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    for ((a, c, p), n) in &rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {:.0} | {} | {} | {} | {} |",
+            a.as_str(),
+            c.as_str(),
+            p.as_str(),
+            n[0],
+            n[1],
+            100.0 * n[1] as f64 / n[0].max(1) as f64,
+            n[2],
+            n[3],
+            n[4],
+            n[5]
+        );
+    }
+    s
+}
+
+/// One line per failed run: map, configuration, what went wrong.
+pub fn failures(results: &[TrialResult]) -> Vec<String> {
+    let mut out: Vec<String> = results
+        .iter()
+        .filter(|r| !r.passed())
+        .map(|r| {
+            let t = &r.trial;
+            format!(
+                "{} {} {} {} seed {}: expected {:?}, got {:?} ({}); {} bumps; {:.1} m of {:.1} m",
+                r.map,
+                t.algorithm.as_str(),
+                t.sensor.as_str(),
+                t.pose.as_str(),
+                t.seed,
+                r.expected,
+                r.outcome,
+                r.reason,
+                r.bumps,
+                r.distance,
+                r.bound
+            )
+        })
+        .collect();
+    out.sort();
+    out
+}

@@ -1,0 +1,57 @@
+//! The fast subset of the navigation trials (DESIGN §6): every built-in trial map once, the
+//! configurations (algorithm × sensor × pose) taken in turn, seed 1. The whole suite (every
+//! configuration, three seeds) is `radarnav nav-suite`; see the README.
+
+use radarnav::Scenario;
+use radarnav::scenario::NAV_SUITE;
+use radarnav::trials::{TrialMap, failures, full_grid, pass_table};
+use rayon::prelude::*;
+
+#[test]
+fn every_trial_map_passes_in_one_configuration_each() {
+    let grid = full_grid(1);
+    let results: Vec<_> = NAV_SUITE
+        .par_iter()
+        .enumerate()
+        .map(|(i, (name, _))| {
+            let s = Scenario::builtin(name).expect("built-in trial map");
+            let map = TrialMap::new(s).expect("a bug mission");
+            map.run(&grid[i % grid.len()]).expect("the run starts")
+        })
+        .collect();
+    assert!(NAV_SUITE.len() >= 15);
+    let passed = results.iter().filter(|r| r.passed()).count();
+    let bumps: usize = results.iter().map(|r| r.bumps).sum();
+    let report = format!(
+        "{}\n{}",
+        pass_table(&results),
+        failures(&results).join("\n")
+    );
+    // The floor: ≥ 95 % of runs on odometry, ≥ 98 % on the true pose, never a bump.
+    assert!(
+        passed as f64 >= 0.95 * results.len() as f64,
+        "{passed} of {} passed\n{report}",
+        results.len()
+    );
+    assert_eq!(bumps, 0, "{report}");
+}
+
+#[test]
+fn the_geometry_tells_reachable_from_closed_maps() {
+    let reach = |name: &str| {
+        let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug mission");
+        [
+            map.expectation(radarnav::trials::SensorClass::Radar)
+                .reachable,
+            map.expectation(radarnav::trials::SensorClass::Laser)
+                .reachable,
+        ]
+    };
+    assert_eq!(reach("nav/pen-goal"), [false, false]);
+    assert_eq!(reach("nav/pen-start"), [false, false]);
+    assert_eq!(reach("nav/doorway"), [true, true]);
+    // Smoke is a wall to the laser only.
+    assert_eq!(reach("nav/smoke-band"), [true, false]);
+    assert_eq!(reach("nav/smoke-cloud"), [true, true]);
+    assert_eq!(reach("nav/hedge-gap"), [true, true]);
+}
