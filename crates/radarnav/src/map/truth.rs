@@ -332,12 +332,30 @@ fn flood_fill(
     start: CellIndex,
     origin: CellIndex,
 ) -> Vec<bool> {
+    flood_fill_from(
+        open,
+        width,
+        height,
+        index_in(start, origin, width, height).into_iter(),
+    )
+}
+
+/// The cells of a `width` × `height` raster (row-major) reachable from `seeds` through `open`
+/// cells, moving between 4-neighbours.
+pub(crate) fn flood_fill_from(
+    open: &[bool],
+    width: usize,
+    height: usize,
+    seeds: impl Iterator<Item = usize>,
+) -> Vec<bool> {
     let mut seen = vec![false; open.len()];
-    let Some(s) = index_in(start, origin, width, height).filter(|&k| open[k]) else {
-        return seen;
-    };
-    let mut stack = vec![s];
-    seen[s] = true;
+    let mut stack = Vec::new();
+    for s in seeds {
+        if open[s] && !seen[s] {
+            seen[s] = true;
+            stack.push(s);
+        }
+    }
     while let Some(k) = stack.pop() {
         let (i, j) = (k % width, k / width);
         let mut push = |n: usize| {

@@ -17,6 +17,7 @@
 use glam::DVec2;
 use rayon::prelude::*;
 
+use crate::map::truth::flood_fill_from;
 use crate::world::overlap::body_box;
 use crate::world::{Material, World};
 
@@ -174,7 +175,12 @@ impl Field {
         // The disc fits where the nearest blocking centre is farther than the radius plus
         // half a cell (where the object's surface may lie).
         let fits: Vec<bool> = dist.iter().map(|&d| d > g.radius + CELL / 2.0).collect();
-        let reach = flood_fill(&fits, r.width, r.height, seeds(r, &fits, g.start, g.radius));
+        let reach = flood_fill_from(
+            &fits,
+            r.width,
+            r.height,
+            seeds(r, &fits, g.start, g.radius).into_iter(),
+        );
         let reachable = (0..n).any(|k| reach[k] && r.centre(k).distance(g.goal) <= g.tolerance);
         let grown: Vec<bool> = dist.iter().map(|&d| d <= g.standoff).collect();
         let (labels, count) = components(&grown, r.width, r.height);
@@ -332,40 +338,6 @@ fn edt_1d(f: &[f64], out: &mut [f64], v: &mut [usize], z: &mut [f64]) {
         let d = q as f64 - v[k] as f64;
         *o = d * d + f[v[k]];
     }
-}
-
-/// The cells reachable from `seeds` through `open` cells (4-neighbours).
-fn flood_fill(open: &[bool], width: usize, height: usize, seeds: Vec<usize>) -> Vec<bool> {
-    let mut seen = vec![false; open.len()];
-    let mut stack = Vec::new();
-    for s in seeds {
-        if open[s] && !seen[s] {
-            seen[s] = true;
-            stack.push(s);
-        }
-    }
-    while let Some(k) = stack.pop() {
-        let (i, j) = (k % width, k / width);
-        let mut push = |n: usize| {
-            if open[n] && !seen[n] {
-                seen[n] = true;
-                stack.push(n);
-            }
-        };
-        if i > 0 {
-            push(k - 1);
-        }
-        if i + 1 < width {
-            push(k + 1);
-        }
-        if j > 0 {
-            push(k - width);
-        }
-        if j + 1 < height {
-            push(k + width);
-        }
-    }
-    seen
 }
 
 /// Connected components (8-neighbours) of `set`: each cell's label and the count.
