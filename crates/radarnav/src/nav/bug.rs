@@ -18,7 +18,20 @@
 //!
 //! The goal is reached within `tolerance` of it. The pose used is the odometry, or the true
 //! pose when the mission asks for it; "back at the hit point" means within
-//! `loop_tolerance` after having been at least twice that far away from it.
+//! `loop_tolerance` after having been at least twice that far away from it, or within
+//! `loop_tolerance` of any point of the path followed at least one small loop ago, going the
+//! same way (see `Boundary::closes_loop`).
+//!
+//! Made to hold on maps nobody tuned it to (DESIGN §6):
+//! * leaving needs the body's corridor toward the goal free, not only the goal's sector;
+//! * Bug1: a hit before getting a follow radius nearer the goal than the leave point is the
+//!   same obstacle (a notch or a concave side), a `no_path` condition;
+//! * a goal inside the standoff of an obstacle beyond it is approached slowly once the body's
+//!   corridor to it is free (the bumpers would trip first);
+//! * every `no_path` condition is first met with a **standoff retry**: the bumpers' safety
+//!   distance shrinks to 0.6 of itself, down to the robot's half-diagonal plus
+//!   [`MIN_CLEARANCE`], and the Bug starts again where the robot is (a new m-line for Bug2).
+//!   Only at the floor is `no_path` reported. The retries are in the report.
 
 use glam::DVec2;
 use serde::Serialize;
@@ -44,7 +57,8 @@ const CLOSER_BY: f64 = 0.2;
 /// Smallest gap kept between the robot's body (its half-diagonal) and the bumpers' safety
 /// distance when a standoff retry shrinks it, m.
 pub const MIN_CLEARANCE: f64 = 0.15;
-/// Each standoff retry keeps this share of the previous safety distance.
+/// Each standoff retry keeps this share of the previous safety distance (the module docs say
+/// 0.6).
 const RETRY_FACTOR: f64 = 0.6;
 /// Spacing of the followed path's remembered samples, m.
 const TRAIL_STEP: f64 = 0.2;
