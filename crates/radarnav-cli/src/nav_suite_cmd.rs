@@ -2,7 +2,6 @@
 //! × both sensors × both poses × seeds, each run judged against its map's geometry; prints
 //! the pass table and writes every run to nav_suite.csv / nav_suite.json.
 
-use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
@@ -13,7 +12,9 @@ use radarnav::map::PoseSource;
 use radarnav::nav::BugAlgorithm;
 use radarnav::record::write_whole;
 use radarnav::scenario::NAV_SUITE;
-use radarnav::trials::{SensorClass, Trial, TrialMap, failures, grid, pass_table, run_all};
+use radarnav::trials::{
+    SensorClass, Trial, TrialMap, failures, grid, pass_table, results_csv, run_all,
+};
 
 /// What `nav-suite` was asked.
 pub struct SuiteArgs<'a> {
@@ -124,35 +125,7 @@ pub fn nav_suite(a: &SuiteArgs<'_>, load: impl Fn(&str) -> Result<Scenario>) -> 
     if let Some(dir) = a.out {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("creating output directory {}", dir.display()))?;
-        let mut csv = String::from(
-            "map,algorithm,sensor,pose,seed,expected,outcome,bumps,distance_m,bound_m,time_s,passed,faults,reason\n",
-        );
-        for r in &results {
-            let t = &r.trial;
-            let faults: Vec<String> = r
-                .faults
-                .iter()
-                .map(|f| format!("{f:?}").to_lowercase())
-                .collect();
-            let _ = writeln!(
-                csv,
-                "{},{},{},{},{},{:?},{:?},{},{:.3},{:.3},{:.2},{},{},\"{}\"",
-                r.map,
-                t.algorithm.as_str(),
-                t.sensor.as_str(),
-                t.pose.as_str(),
-                t.seed,
-                r.expected,
-                r.outcome,
-                r.bumps,
-                r.distance,
-                r.bound,
-                r.time,
-                r.passed(),
-                faults.join("+"),
-                r.reason.replace('"', "'")
-            );
-        }
+        let csv = results_csv(&results);
         let path = dir.join("nav_suite.csv");
         write_whole(&path, csv.as_bytes())?;
         let json = serde_json::to_vec_pretty(&results)?;

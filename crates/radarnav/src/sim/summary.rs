@@ -19,6 +19,18 @@ pub enum RunOutcome {
     Timeout,
 }
 
+impl RunOutcome {
+    /// The name written in `summary.json`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Completed => "completed",
+            Self::Reached => "reached",
+            Self::NoPath => "no_path",
+            Self::Timeout => "timeout",
+        }
+    }
+}
+
 impl From<Ending> for RunOutcome {
     fn from(e: Ending) -> Self {
         match e {

@@ -323,11 +323,68 @@ pub struct TrialResult {
     pub reason: String,
 }
 
+impl Fault {
+    /// The name written in the results.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Outcome => "outcome",
+            Self::Timeout => "timeout",
+            Self::Bumped => "bumped",
+            Self::OverBound => "over_bound",
+        }
+    }
+}
+
 impl TrialResult {
     /// Whether the run passed.
     pub fn passed(&self) -> bool {
         self.faults.is_empty()
     }
+
+    /// `map algorithm sensor pose seed N`: which run this was.
+    pub fn label(&self) -> String {
+        let t = &self.trial;
+        format!(
+            "{} {} {} {} seed {}",
+            self.map,
+            t.algorithm.as_str(),
+            t.sensor.as_str(),
+            t.pose.as_str(),
+            t.seed
+        )
+    }
+}
+
+/// Every run as a CSV table, one row each, with a header.
+pub fn results_csv(results: &[TrialResult]) -> String {
+    use std::fmt::Write;
+    let mut csv = String::from(
+        "map,algorithm,sensor,pose,seed,expected,outcome,bumps,distance_m,bound_m,attempts,time_s,passed,faults,reason\n",
+    );
+    for r in results {
+        let t = &r.trial;
+        let faults: Vec<&str> = r.faults.iter().map(|f| f.as_str()).collect();
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{},{},{:.3},{:.3},{},{:.2},{},{},\"{}\"",
+            r.map,
+            t.algorithm.as_str(),
+            t.sensor.as_str(),
+            t.pose.as_str(),
+            t.seed,
+            r.expected.as_str(),
+            r.outcome.as_str(),
+            r.bumps,
+            r.distance,
+            r.bound,
+            r.attempts,
+            r.time,
+            r.passed(),
+            faults.join("+"),
+            r.reason.replace('"', "'")
+        );
+    }
+    csv
 }
 
 /// Runs every trial on every map, in parallel; `progress` is called after each run.
@@ -395,16 +452,11 @@ pub fn failures(results: &[TrialResult]) -> Vec<String> {
         .iter()
         .filter(|r| !r.passed())
         .map(|r| {
-            let t = &r.trial;
             format!(
-                "{} {} {} {} seed {}: expected {:?}, got {:?} ({}); {} bumps; {:.1} m of {:.1} m",
-                r.map,
-                t.algorithm.as_str(),
-                t.sensor.as_str(),
-                t.pose.as_str(),
-                t.seed,
-                r.expected,
-                r.outcome,
+                "{}: expected {}, got {} ({}); {} bumps; {:.1} m of {:.1} m",
+                r.label(),
+                r.expected.as_str(),
+                r.outcome.as_str(),
                 r.reason,
                 r.bumps,
                 r.distance,
@@ -414,4 +466,45 @@ pub fn failures(results: &[TrialResult]) -> Vec<String> {
         .collect();
     out.sort();
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_run_is_one_csv_row_and_one_failure_line() {
+        let r = TrialResult {
+            map: "nav/x".into(),
+            trial: Trial {
+                algorithm: BugAlgorithm::Bug2,
+                sensor: SensorClass::Laser,
+                pose: PoseSource::Odometry,
+                seed: 2,
+            },
+            expected: RunOutcome::Reached,
+            outcome: RunOutcome::NoPath,
+            bumps: 1,
+            distance: 12.5,
+            bound: 10.0,
+            attempts: 3,
+            time: 40.0,
+            faults: vec![Fault::Outcome, Fault::Bumped, Fault::OverBound],
+            reason: "said \"no\"".into(),
+        };
+        let csv = results_csv(std::slice::from_ref(&r));
+        let rows: Vec<&str> = csv.lines().collect();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(
+            rows[1],
+            "nav/x,bug2,laser,odometry,2,reached,no_path,1,12.500,10.000,3,40.00,false,outcome+bumped+over_bound,\"said 'no'\""
+        );
+        assert_eq!(rows[0].split(',').count(), rows[1].split(',').count());
+        assert_eq!(
+            failures(&[r]),
+            [
+                "nav/x bug2 laser odometry seed 2: expected reached, got no_path (said \"no\"); 1 bumps; 12.5 m of 10.0 m"
+            ]
+        );
+    }
 }
