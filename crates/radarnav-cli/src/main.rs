@@ -188,7 +188,7 @@ enum Command {
         /// Poses navigation believes, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "truth,odometry")]
         poses: Vec<String>,
-        /// Write nav_suite.csv and nav_suite.json here.
+        /// Write nav_suite.csv, nav_suite.json and failed/ (a figure of each failed run) here.
         #[arg(long)]
         out: Option<PathBuf>,
     },

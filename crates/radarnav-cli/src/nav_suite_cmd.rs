@@ -1,6 +1,7 @@
 //! `radarnav nav-suite`: Bug missions on maps nobody tuned the navigation to, both algorithms
 //! × both sensors × both poses × seeds, each run judged against its map's geometry; prints
-//! the pass table and writes every run to nav_suite.csv / nav_suite.json.
+//! the pass table and writes every run to nav_suite.csv / nav_suite.json, and a figure of
+//! each failed run to failed/.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -11,6 +12,7 @@ use radarnav::Scenario;
 use radarnav::map::PoseSource;
 use radarnav::nav::BugAlgorithm;
 use radarnav::record::write_whole;
+use radarnav::render::save_png;
 use radarnav::scenario::NAV_SUITE;
 use radarnav::trials::{
     SensorClass, Trial, TrialMap, failures, grid, pass_table, results_csv, run_all,
@@ -99,12 +101,35 @@ pub fn nav_suite(a: &SuiteArgs<'_>, load: impl Fn(&str) -> Result<Scenario>) -> 
         ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} ({eta} left) {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let results = run_all(&maps, &trials, |r| {
+    let failed_dir = a.out.map(|d| d.join("failed"));
+    if let Some(dir) = &failed_dir {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating output directory {}", dir.display()))?;
+    }
+    let figure_errors = std::sync::Mutex::new(Vec::new());
+    let results = run_all(&maps, &trials, |map, r, paths| {
         bar.inc(1);
-        if !r.passed() {
-            bar.set_message(format!("last failure: {}", r.map));
+        if r.passed() {
+            return;
+        }
+        bar.set_message(format!("last failure: {}", r.map));
+        if let Some(dir) = &failed_dir {
+            let name = format!("{}.png", r.label().replace(['/', ' '], "_"));
+            let path = dir.join(name);
+            if let Err(e) = map.figure(r, paths).and_then(|fig| save_png(&fig, &path))
+                && let Ok(mut errors) = figure_errors.lock()
+            {
+                errors.push(e.to_string());
+            }
         }
     })?;
+    if let Some(e) = figure_errors
+        .into_inner()
+        .ok()
+        .and_then(|e| e.into_iter().next())
+    {
+        bail!("writing a failed run's figure: {e}");
+    }
     bar.finish_and_clear();
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -130,7 +155,12 @@ pub fn nav_suite(a: &SuiteArgs<'_>, load: impl Fn(&str) -> Result<Scenario>) -> 
         write_whole(&path, csv.as_bytes())?;
         let json = serde_json::to_vec_pretty(&results)?;
         write_whole(&dir.join("nav_suite.json"), &json)?;
-        writeln!(out, "wrote {} and nav_suite.json", path.display())?;
+        writeln!(
+            out,
+            "wrote {} and nav_suite.json; a figure of each failed run in {}",
+            path.display(),
+            dir.join("failed").display()
+        )?;
     }
     Ok(())
 }

@@ -495,13 +495,22 @@ pub fn encode_png(pixmap: &Pixmap) -> Result<Vec<u8>, RenderError> {
     })
 }
 
-/// Writes a finished figure to `path` as PNG.
+/// Writes a finished figure to `path` as PNG, under a temporary name renamed when complete
+/// (an interrupted write leaves no half figure).
 pub fn save_png(pixmap: &Pixmap, path: &std::path::Path) -> Result<(), RenderError> {
     let bytes = encode_png(pixmap)?;
-    std::fs::write(path, bytes).map_err(|e| RenderError::Write {
-        path: path.display().to_string(),
-        source: Box::new(e),
-    })
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".partial");
+    let tmp = std::path::PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            RenderError::Write {
+                path: path.display().to_string(),
+                source: Box::new(e),
+            }
+        })
 }
 
 /// An opaque image from packed 8-bit RGB rows (as plotting back ends draw), for

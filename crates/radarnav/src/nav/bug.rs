@@ -67,6 +67,13 @@ const SAME_WAY: f64 = 1.05;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
 
+/// The safety distance a standoff retry tries after `safety`, or `None` at the floor (the
+/// robot's half-diagonal plus [`MIN_CLEARANCE`]).
+pub fn retry_safety(safety: f64, vehicle: &VehicleSpec) -> Option<f64> {
+    let floor = 0.5 * vehicle.length.hypot(vehicle.width) + MIN_CLEARANCE;
+    (safety > floor + 1e-9).then(|| (safety * RETRY_FACTOR).max(floor))
+}
+
 /// Which Bug.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -178,6 +185,8 @@ struct Boundary {
     away_from_closest: bool,
     /// Bug2: within the m-line tolerance at the last call.
     on_mline: bool,
+    /// Bug2: a closer crossing was met; leave there (once out of a gap being passed).
+    leave: bool,
     /// The followed path: (position, heading, distance followed), every [`TRAIL_STEP`].
     trail: Vec<(DVec2, f64, f64)>,
 }
@@ -260,11 +269,9 @@ impl BugController {
     /// looks closed at the standoff and open nearer in.
     fn no_path(&mut self, reason: &str, p: DVec2, vehicle: &VehicleSpec) -> Decision {
         let safety = self.bumpers.config().safety_for(vehicle);
-        let floor = 0.5 * vehicle.length.hypot(vehicle.width) + MIN_CLEARANCE;
-        if safety <= floor + 1e-9 {
+        let Some(next) = retry_safety(safety, vehicle) else {
             return self.end(Ending::NoPath, reason);
-        }
-        let next = (safety * RETRY_FACTOR).max(floor);
+        };
         self.report.retries.push(RetryReport {
             at: p.to_array(),
             after: reason.to_owned(),
@@ -376,7 +383,8 @@ impl Behaviour for BugController {
                     }
                     self.report.hit_points.push(p.to_array());
                     self.follower =
-                        WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE);
+                        WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE)
+                            .passing_gaps(vehicle.length, vehicle.width);
                     self.follower.engage();
                     self.mode = Mode::Follow(Boundary {
                         hit: p,
@@ -389,9 +397,10 @@ impl Behaviour for BugController {
                         circled: false,
                         away_from_closest: false,
                         on_mline: true,
+                        leave: false,
                         trail: Vec::new(),
                     });
-                    return Decision::Drive(self.follower.command(&b, dt, radius));
+                    return Decision::Drive(self.follower.command(&b, &pose, dt, radius));
                 }
                 let omega = (K_HEADING * heading).clamp(-TURN_RATE, TURN_RATE);
                 let v = if heading.abs() > TURN_IN_PLACE {
@@ -405,6 +414,7 @@ impl Behaviour for BugController {
                 if bumped {
                     self.follower.bumped();
                 }
+                let passing = self.follower.passing();
                 self.report.boundary_distance += step;
                 bd.travelled += step;
                 let from_hit = (p - bd.hit).length();
@@ -433,7 +443,9 @@ impl Behaviour for BugController {
                             }
                             bd.leave_at = bd.travelled + ahead.min(behind);
                         }
-                        if bd.about_turn > 0.0 {
+                        // Turning about or leaving waits until a gap being passed is
+                        // behind (its sides are nearer than the body's turning circle).
+                        if bd.about_turn > 0.0 && !passing {
                             let s = self.follower.side().sign();
                             bd.about_turn -= TURN_RATE * dt;
                             if bd.about_turn <= 0.0 {
@@ -442,7 +454,8 @@ impl Behaviour for BugController {
                                     Side::Right => Side::Left,
                                 };
                                 self.follower =
-                                    WallFollower::new(other, self.mission.speed, TURN_RATE);
+                                    WallFollower::new(other, self.mission.speed, TURN_RATE)
+                                        .passing_gaps(vehicle.length, vehicle.width);
                                 self.follower.engage();
                             }
                             return Decision::Drive(DriveCommand::twist(0.0, -s * TURN_RATE));
@@ -461,7 +474,7 @@ impl Behaviour for BugController {
                                 && (bd.away_from_closest || bd.closest.0 == bd.hit))
                                 || goal_dist <= bd.closest.1 + tol / 2.0
                                 || bd.travelled >= bd.leave_at;
-                            if at_closest {
+                            if at_closest && !passing {
                                 if goal_blocked {
                                     return self.no_path(
                                         "bug1: the way toward the goal from the closest point is blocked by the same obstacle",
@@ -485,7 +498,14 @@ impl Behaviour for BugController {
                         bd.on_mline = near;
                         if crossed {
                             self.report.mline_crossings += 1;
-                            if goal_dist < bd.hit_goal_dist - CLOSER_BY && !goal_blocked {
+                            if goal_dist < bd.hit_goal_dist - CLOSER_BY {
+                                bd.leave = true;
+                            }
+                        }
+                        // A crossing inside a gap being passed is left from once through.
+                        if bd.leave && !passing {
+                            bd.leave = false;
+                            if !goal_blocked {
                                 self.report.leave_points.push(p.to_array());
                                 self.mode = Mode::ToGoal;
                                 return Decision::Drive(DriveCommand::STOP);
@@ -500,7 +520,7 @@ impl Behaviour for BugController {
                         }
                     }
                 }
-                Decision::Drive(self.follower.command(&b, dt, radius))
+                Decision::Drive(self.follower.command(&b, &pose, dt, radius))
             }
         }
     }

@@ -178,6 +178,7 @@ impl BumperConfig {
 /// The bumpers' states from one scan.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bumpers {
+    stamp: f64,
     states: Vec<BumperState>,
     nearest: Vec<f64>,
     /// Every return in the robot frame (below-minimum ranges at the centre), for the
@@ -238,6 +239,7 @@ impl Bumpers {
             })
             .collect();
         Self {
+            stamp: scan.stamp,
             states,
             nearest,
             points,
@@ -253,6 +255,16 @@ impl Bumpers {
             let along = p.dot(u);
             (0.0..=length).contains(&along) && u.perp_dot(*p).abs() <= half_width
         })
+    }
+
+    /// Every return in the robot frame, in scan order.
+    pub fn points(&self) -> &[DVec2] {
+        &self.points
+    }
+
+    /// Time of the scan these bumpers come from, s.
+    pub fn stamp(&self) -> f64 {
+        self.stamp
     }
 
     /// Number of sectors.

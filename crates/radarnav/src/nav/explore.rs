@@ -278,6 +278,7 @@ impl Behaviour for ExploreController {
         };
         let speed = self.mission.speed;
         let radius = self.bumpers.follow_radius(input.vehicle);
+        let pose = nav_pose(self.mission.pose, input);
         let front_blocked = bumped || front_trips(&b);
         match &mut self.phase {
             Phase::Straight => {
@@ -312,7 +313,7 @@ impl Behaviour for ExploreController {
                     self.phase = Phase::Wall {
                         until: input.time + SPIRAL_WALL_TIME,
                     };
-                    return Decision::Drive(self.follower.command(&b, dt, radius));
+                    return Decision::Drive(self.follower.command(&b, &pose, dt, radius));
                 }
                 let r = SPIRAL_R0 + SPIRAL_SPACING * *turned / TAU;
                 let omega = self.mission.follow.sign() * speed / r;
@@ -326,7 +327,7 @@ impl Behaviour for ExploreController {
                 if input.time >= *until && !front_blocked {
                     self.phase = Phase::Spiral { turned: 0.0 };
                 }
-                Decision::Drive(self.follower.command(&b, dt, radius))
+                Decision::Drive(self.follower.command(&b, &pose, dt, radius))
             }
             Phase::Path => self.frontier_step(input, &b, front_blocked),
         }

@@ -4,6 +4,7 @@
 pub mod bug;
 pub mod bumper;
 pub mod explore;
+pub mod passage;
 mod teleop;
 pub mod wall_follow;
 mod waypoints;
@@ -42,20 +43,20 @@ pub trait Behaviour {
 }
 
 /// A behaviour with the reflex of a real bumper: after a refused move, back away from what
-/// was hit for a moment (forward if the robot hit something while reversing) before the
-/// behaviour resumes, told that it bumped: the sensor missed something (foliage the radar
+/// was hit for a moment (forward if the robot hit something while reversing, turning back
+/// if it hit something turning on the spot) before the behaviour resumes, told that it bumped: the sensor missed something (foliage the radar
 /// crosses whole), so the way it was going is blocked.
 #[derive(Clone, Debug)]
 pub struct WithRecoil<B> {
     behaviour: B,
     remaining: u32,
-    speed: f64,
-    last_v: f64,
+    recoil: (f64, f64),
+    last: (f64, f64),
     recoiled: bool,
 }
 
-/// How long a recoil lasts, s, and its speed, m/s.
-const RECOIL: (f64, f64) = (0.6, 0.2);
+/// How long a recoil lasts, s, its speed, m/s, and its turn rate after a turn, rad/s.
+const RECOIL: (f64, f64, f64) = (0.6, 0.2, 0.5);
 
 impl<B> WithRecoil<B> {
     /// `behaviour` with the reflex.
@@ -63,8 +64,8 @@ impl<B> WithRecoil<B> {
         Self {
             behaviour,
             remaining: 0,
-            speed: 0.0,
-            last_v: 0.0,
+            recoil: (0.0, 0.0),
+            last: (0.0, 0.0),
             recoiled: false,
         }
     }
@@ -83,22 +84,27 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
     fn update(&mut self, input: &ControlInput<'_>) -> Decision {
         if input.bumped && self.remaining == 0 {
             self.remaining = (RECOIL.0 * self.behaviour.rate_hz()).ceil() as u32;
-            self.speed = if self.last_v > 0.0 {
-                -RECOIL.1
+            let (v, omega) = self.last;
+            // A turn on the spot that hit something is undone by turning back; a move by
+            // moving the other way.
+            self.recoil = if v == 0.0 && omega != 0.0 {
+                (0.0, -omega.signum() * RECOIL.2)
+            } else if v > 0.0 {
+                (-RECOIL.1, 0.0)
             } else {
-                RECOIL.1
+                (RECOIL.1, 0.0)
             };
             self.recoiled = true;
         }
         if self.remaining > 0 {
             self.remaining -= 1;
-            return Decision::Drive(DriveCommand::twist(self.speed, 0.0));
+            return Decision::Drive(DriveCommand::twist(self.recoil.0, self.recoil.1));
         }
         let d = self
             .behaviour
             .decide(input, std::mem::take(&mut self.recoiled));
         if let Decision::Drive(DriveCommand::Twist(t)) = d {
-            self.last_v = t.v;
+            self.last = (t.v, t.omega);
         }
         d
     }

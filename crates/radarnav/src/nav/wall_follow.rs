@@ -14,10 +14,19 @@
 //! At a gap in foliage the radar sees through, rule 4 turns the robot into the gap; the
 //! returns inside the foliage on both sides of it then trip the front bumper and rule 1
 //! turns it back out, so it passes gaps narrower than its safety circle without entering.
+//!
+//! A follower told its body ([`WallFollower::passing_gaps`]) also keeps the boundary it
+//! follows where a neighbour comes nearer than twice the follow radius: a gap on the wall
+//! side wide enough for the body to turn in is passed by a [`Passage`] (see
+//! [`super::passage`]) instead of being rounded on a circle that runs into the neighbour.
 
 use std::f64::consts::TAU;
 
+use glam::DVec2;
+
 use super::bumper::{BumperState, Bumpers};
+use super::passage::{PassStep, Passage, find_gap};
+use crate::pose::Pose;
 use crate::vehicle::DriveCommand;
 
 /// How far the follower turns away after a bump, rad (45°).
@@ -72,6 +81,21 @@ pub enum FollowRule {
     Along,
     /// Rule 4: arcing toward the lost wall.
     TowardWall,
+    /// Passing a gap narrower than twice the follow radius.
+    Gap,
+}
+
+/// Gap passing: the body and what it has passed.
+#[derive(Clone, Debug)]
+struct GapPassing {
+    length: f64,
+    width: f64,
+    stamp: f64,
+    travelled: f64,
+    last: Option<DVec2>,
+    passage: Option<Passage>,
+    /// The last gap passed or given up (world middle) and the distance travelled then.
+    done: Option<(DVec2, f64)>,
 }
 
 /// The wall-following behaviour (see the module docs).
@@ -84,6 +108,7 @@ pub struct WallFollower {
     lost_turn: f64,
     bump_turn: f64,
     rule: FollowRule,
+    gaps: Option<GapPassing>,
 }
 
 impl WallFollower {
@@ -98,7 +123,23 @@ impl WallFollower {
             lost_turn: 0.0,
             bump_turn: 0.0,
             rule: FollowRule::Search,
+            gaps: None,
         }
+    }
+
+    /// Also passes gaps on the wall side narrower than twice the follow radius (module
+    /// docs), for a body of `length` × `width` m.
+    pub fn passing_gaps(mut self, length: f64, width: f64) -> Self {
+        self.gaps = Some(GapPassing {
+            length,
+            width,
+            stamp: f64::NEG_INFINITY,
+            travelled: 0.0,
+            last: None,
+            passage: None,
+            done: None,
+        });
+        self
     }
 
     /// The side the wall is kept on.
@@ -111,6 +152,12 @@ impl WallFollower {
         self.rule
     }
 
+    /// Whether a gap is being passed: turning on the spot or leaving the boundary now could
+    /// touch its sides.
+    pub fn passing(&self) -> bool {
+        self.gaps.as_ref().is_some_and(|g| g.passage.is_some())
+    }
+
     /// Starts following a wall already met (Bug's hit point), skipping the search.
     pub fn engage(&mut self) {
         self.found = true;
@@ -121,11 +168,69 @@ impl WallFollower {
     /// the spot by [`BUMP_TURN`] before following on.
     pub fn bumped(&mut self) {
         self.bump_turn = BUMP_TURN;
+        if let Some(g) = &mut self.gaps
+            && let Some(p) = g.passage.take()
+        {
+            g.done = Some((p.gap().mid, g.travelled));
+        }
     }
 
-    /// The command for the coming `dt` seconds; convex corners are rounded on circles of
-    /// `radius` metres (the wanted wall distance, [`super::BumperSensor::follow_radius`]).
-    pub fn command(&mut self, b: &Bumpers, dt: f64, radius: f64) -> DriveCommand {
+    /// A gap to pass or being passed: the move, or `None` for the ordinary rules.
+    fn pass_gap(&mut self, b: &Bumpers, pose: &Pose, dt: f64, radius: f64) -> Option<DriveCommand> {
+        let side = self.side.sign();
+        let ready = self.found && self.bump_turn <= 0.0;
+        let g = self.gaps.as_mut()?;
+        let p = pose.xy();
+        g.travelled += g.last.map_or(0.0, |l| (p - l).length());
+        g.last = Some(p);
+        if b.stamp() != g.stamp && ready {
+            g.stamp = b.stamp();
+            let turn_diameter = g.length.hypot(g.width);
+            let seen = find_gap(
+                b.points(),
+                side,
+                2.0 * radius + 0.5,
+                radius + 0.5,
+                turn_diameter,
+                2.0 * radius,
+            )
+            .map(|gap| gap.in_frame(pose));
+            match (&mut g.passage, seen) {
+                (Some(passage), Some(seen)) => {
+                    passage.refine(&seen);
+                }
+                (None, Some(seen)) => {
+                    // Not the gap just passed or given up, until a small loop later.
+                    let fresh = g.done.is_none_or(|(mid, at)| {
+                        (seen.mid - mid).length() > 1.0 || g.travelled - at > TAU * radius + 2.0
+                    });
+                    if fresh {
+                        g.passage = Some(Passage::new(seen));
+                    }
+                }
+                _ => {}
+            }
+        }
+        let passage = g.passage.as_mut()?;
+        match passage.step(pose, b.points(), g.length, g.width, dt) {
+            PassStep::Drive(v, omega) => Some(DriveCommand::twist(v, omega)),
+            PassStep::Done | PassStep::Blocked => {
+                g.done = Some((passage.gap().mid, g.travelled));
+                g.passage = None;
+                None
+            }
+        }
+    }
+
+    /// The command for the coming `dt` seconds at the believed `pose`; convex corners are
+    /// rounded on circles of `radius` metres (the wanted wall distance,
+    /// [`super::BumperSensor::follow_radius`]).
+    pub fn command(&mut self, b: &Bumpers, pose: &Pose, dt: f64, radius: f64) -> DriveCommand {
+        if let Some(c) = self.pass_gap(b, pose, dt, radius) {
+            self.rule = FollowRule::Gap;
+            self.lost_turn = 0.0;
+            return c;
+        }
         let s = self.side.sign();
         let quarter = b.sectors() as isize / 4;
         let si = s as isize;
@@ -204,7 +309,7 @@ mod tests {
         use std::f64::consts::FRAC_PI_2;
         let mut f = WallFollower::new(Side::Right, 0.4, 0.8);
         let step = |f: &mut WallFollower, b: &Bumpers| {
-            let t = twist(f.command(b, 0.1, 1.5));
+            let t = twist(f.command(b, &Pose::default(), 0.1, 1.5));
             (f.rule(), t.v, t.omega)
         };
         // Nothing anywhere: search straight ahead.
@@ -232,7 +337,7 @@ mod tests {
         assert!((w + v / 1.5).abs() < 1e-12, "{v} {w}");
         // A full circle of that without a wall: back to searching.
         for _ in 0..400 {
-            f.command(&wall(None, 0.0), 0.1, 1.5);
+            f.command(&wall(None, 0.0), &Pose::default(), 0.1, 1.5);
         }
         assert_eq!(f.rule(), FollowRule::Search);
         // After a bump: turn away by 45° before anything else.

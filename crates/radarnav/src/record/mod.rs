@@ -137,6 +137,65 @@ impl Trail {
     }
 }
 
+/// The true and believed paths of a run and where it bumped: an [`Observer`] that draws
+/// them over the world (`path.png`, the trial figures).
+#[derive(Clone, Debug, Default)]
+pub struct PathTrace {
+    /// True poses, one per centimetre driven or more.
+    pub truth: Trail,
+    /// Odometry poses, likewise.
+    pub odometry: Trail,
+    /// Where moves were refused (at most [`crate::sim::MAX_BUMP_EVENTS`]).
+    pub bumps: Vec<DVec2>,
+}
+
+impl PathTrace {
+    /// Closes both paths with the run's final poses.
+    pub fn end(&mut self, summary: &RunSummary) {
+        self.truth.end(&summary.final_pose);
+        self.odometry.end(&summary.final_odometry);
+    }
+
+    /// The figure: `world`, the odometry and true paths, bumps, the robot at `start` and at
+    /// the end, titled `title`, `pixels` on its longer side.
+    pub fn figure(
+        &self,
+        world: &World,
+        vehicle: &VehicleSpec,
+        start: &Pose,
+        title: &str,
+        pixels: u32,
+    ) -> Result<tiny_skia::Pixmap, RenderError> {
+        let mut fig = Figure::of_world(world, None, pixels)?;
+        fig.draw_path(
+            &self.odometry.points(),
+            [150, 150, 150],
+            2.0,
+            "path: odometry",
+        );
+        fig.draw_path(&self.truth.points(), [20, 120, 40], 3.0, "path: true");
+        fig.draw_crosses(&self.bumps, [200, 0, 160], "bump");
+        fig.draw_robot(start, vehicle);
+        if let Some(end) = self.truth.poses().last() {
+            fig.draw_robot(end, vehicle);
+        }
+        Ok(fig.finish(title))
+    }
+}
+
+impl Observer for PathTrace {
+    type Error = std::convert::Infallible;
+
+    fn on_step(&mut self, s: &Step) -> Result<(), Self::Error> {
+        self.truth.push(&s.truth);
+        self.odometry.push(&s.odometry);
+        if s.bumped && self.bumps.len() < crate::sim::MAX_BUMP_EVENTS {
+            self.bumps.push(s.truth.xy());
+        }
+        Ok(())
+    }
+}
+
 /// The image files of one imaging sensor.
 struct ImageFiles {
     sensor: usize,
@@ -152,10 +211,8 @@ pub struct Recorder<'w> {
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
     #[cfg(feature = "mcap")]
     mcap: Option<mcap_log::McapLog<Out>>,
-    /// True poses, one per centimetre driven or more (for the figure and the MCAP path).
-    truth: Trail,
-    odometry: Trail,
-    bumps: Vec<DVec2>,
+    /// The paths (for the figure and the MCAP path).
+    paths: PathTrace,
     vehicle: &'static VehicleSpec,
     written: Vec<PathBuf>,
     maps: Vec<Mapper>,
@@ -234,9 +291,7 @@ impl<'w> Recorder<'w> {
             scan_logs,
             #[cfg(feature = "mcap")]
             mcap,
-            truth: Trail::default(),
-            odometry: Trail::default(),
-            bumps: Vec::new(),
+            paths: PathTrace::default(),
             vehicle: robot.vehicle,
             written,
             maps: Vec::new(),
@@ -380,36 +435,27 @@ impl<'w> Recorder<'w> {
             }
         }
         // The last pose is not in the step log (steps log their start).
-        self.truth.end(&summary.final_pose);
+        self.paths.end(summary);
         #[cfg(feature = "mcap")]
         if let Some(m) = self.mcap.take() {
             let path = self.dir.join(files::MCAP);
-            m.finish(summary.duration, self.truth.poses())?
+            m.finish(summary.duration, self.paths.truth.poses())?
                 .flush()
                 .map_err(io_at(&path))?;
             self.written.push(path);
         }
-        self.odometry.end(&summary.final_odometry);
-        let mut fig = Figure::of_world(&scenario.world, None, pixels)?;
-        fig.draw_path(
-            &self.odometry.points(),
-            [150, 150, 150],
-            2.0,
-            "path: odometry",
-        );
-        let truth = self.truth.points();
-        fig.draw_path(&truth, [20, 120, 40], 3.0, "path: true");
-        fig.draw_crosses(&self.bumps, [200, 0, 160], "bump");
-        fig.draw_robot(&robot.start, robot.vehicle);
-        fig.draw_robot(&summary.final_pose, robot.vehicle);
         let png = self.dir.join(files::PATH_PNG);
-        save_png(
-            &fig.finish(&format!(
+        let fig = self.paths.figure(
+            &scenario.world,
+            robot.vehicle,
+            &robot.start,
+            &format!(
                 "{} - {} drove {:.1} m in {:.1} s, {} bumps",
                 scenario.name, robot.name, summary.distance, summary.duration, summary.bumps
-            )),
-            &png,
+            ),
+            pixels,
         )?;
+        save_png(&fig, &png)?;
         self.written.push(png);
         for m in &mut self.maps {
             m.finish_coverage(summary.duration);
@@ -447,7 +493,7 @@ impl<'w> Recorder<'w> {
                 m.config().pose.as_str(),
             );
             let overlay = export::Overlay {
-                path: &truth,
+                path: &self.paths.truth.points(),
                 robot: Some((robot.vehicle, robot.start, summary.final_pose)),
                 region: Some(world_region(&scenario.world)),
                 marks: None,
@@ -604,11 +650,7 @@ impl Observer for Recorder<'_> {
         for sweep in &sweeps {
             self.write_sweep(sweep)?;
         }
-        self.truth.push(t);
-        self.odometry.push(o);
-        if s.bumped && self.bumps.len() < crate::sim::MAX_BUMP_EVENTS {
-            self.bumps.push(DVec2::new(t.x, t.y));
-        }
+        let Ok(()) = self.paths.on_step(s);
         Ok(())
     }
 }

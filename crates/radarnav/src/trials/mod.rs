@@ -11,8 +11,9 @@
 //! * it never bumped;
 //! * its true path length keeps the classic bound of its algorithm.
 //!
-//! Runs last as long as the scenario says, or longer when the bound needs it (twice the
-//! bound at cruise speed plus a minute), so a timeout means the robot was lost, not slow.
+//! Runs last as long as the scenario says, or longer when the bounds need it: twice the first
+//! attempt's bound at cruise speed for it and for each standoff retry the bumpers allow, plus
+//! a minute. A timeout means the robot was lost, not slow.
 
 pub mod geometry;
 
@@ -23,10 +24,13 @@ use thiserror::Error;
 use crate::Scenario;
 use crate::map::PoseSource;
 use crate::mission::{Mission, MissionError, MissionKind};
+use crate::nav::bug::retry_safety;
 use crate::nav::{BugAlgorithm, BugMission, BumperSensor, read_first_echoes};
+use crate::record::PathTrace;
+use crate::render::RenderError;
 use crate::scenario::{MountedSensor, Robot};
 use crate::sensor::SensorKind;
-use crate::sim::{NoObserver, RunOutcome, RunSettings, SimError, Simulation};
+use crate::sim::{RunOutcome, RunSettings, SimError, Simulation};
 pub use geometry::{Expectation, SensorClass, TrialGeometry};
 
 /// Why a trial cannot run.
@@ -184,6 +188,44 @@ impl TrialMap {
 
     /// Runs `trial`.
     pub fn run(&self, trial: &Trial) -> Result<TrialResult, TrialError> {
+        self.run_traced(trial).map(|(r, _)| r)
+    }
+
+    /// The figure of a run: the map, the true and believed paths, bumps and the verdict.
+    pub fn figure(
+        &self,
+        result: &TrialResult,
+        paths: &PathTrace,
+    ) -> Result<tiny_skia::Pixmap, RenderError> {
+        let verdict = if result.passed() {
+            "passed".to_owned()
+        } else {
+            result
+                .faults
+                .iter()
+                .map(|f| f.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        paths.figure(
+            &self.scenario.world,
+            self.robot.vehicle,
+            &self.robot.start,
+            &format!(
+                "{} - {} [{}] {:.0} m / {:.0} m, {} bumps",
+                result.label(),
+                result.outcome.as_str(),
+                verdict,
+                result.distance,
+                result.bound,
+                result.bumps
+            ),
+            1000,
+        )
+    }
+
+    /// Runs `trial`, keeping its paths for [`TrialMap::figure`].
+    pub fn run_traced(&self, trial: &Trial) -> Result<(TrialResult, PathTrace), TrialError> {
         let e = self.expectation(trial.sensor);
         let pick = |e: &Expectation| match trial.algorithm {
             BugAlgorithm::Bug1 => e.bug1_bound,
@@ -201,13 +243,21 @@ impl TrialMap {
             controller_hz: self.controller_hz,
             kind: MissionKind::Bug(bug.clone()),
         };
+        // Time for a path as long as the bounds of the first attempt and of every standoff
+        // retry the bumpers allow, at half the cruise speed.
+        let mut attempts = 1.0;
+        let mut safety = bug.bumpers.safety_for(self.robot.vehicle);
+        while let Some(next) = retry_safety(safety, self.robot.vehicle) {
+            attempts += 1.0;
+            safety = next;
+        }
         let settings = RunSettings {
             seed: trial.seed,
             duration: self
                 .scenario
                 .sim
                 .duration
-                .max(2.0 * first_bound / bug.speed + 60.0),
+                .max(2.0 * attempts * first_bound / bug.speed + 60.0),
             ..RunSettings::of(&self.scenario)
         };
         let mut sim = Simulation::new(
@@ -217,7 +267,9 @@ impl TrialMap {
             settings,
         )
         .map_err(|err| TrialError::Sim(self.name.clone(), err))?;
-        let Ok(summary) = sim.run(&mut NoObserver);
+        let mut paths = PathTrace::default();
+        let Ok(summary) = sim.run(&mut paths);
+        paths.end(&summary);
         // A standoff retry starts a new Bug run where it is, nearer its boundaries: the bound
         // of the whole run is the sum of each attempt's classic bound at its own standoff.
         let mut bound = first_bound;
@@ -261,7 +313,7 @@ impl TrialMap {
         if summary.distance > bound {
             faults.push(Fault::OverBound);
         }
-        Ok(TrialResult {
+        let result = TrialResult {
             map: self.name.clone(),
             trial: *trial,
             expected,
@@ -278,7 +330,8 @@ impl TrialMap {
                 .and_then(|n| n["reason"].as_str())
                 .unwrap_or_default()
                 .to_owned(),
-        })
+        };
+        Ok((result, paths))
     }
 }
 
@@ -391,7 +444,7 @@ pub fn results_csv(results: &[TrialResult]) -> String {
 pub fn run_all(
     maps: &[TrialMap],
     trials: &[Trial],
-    progress: impl Fn(&TrialResult) + Sync,
+    progress: impl Fn(&TrialMap, &TrialResult, &PathTrace) + Sync,
 ) -> Result<Vec<TrialResult>, TrialError> {
     let jobs: Vec<(&TrialMap, &Trial)> = maps
         .iter()
@@ -399,8 +452,8 @@ pub fn run_all(
         .collect();
     jobs.par_iter()
         .map(|(m, t)| {
-            let r = m.run(t)?;
-            progress(&r);
+            let (r, paths) = m.run_traced(t)?;
+            progress(m, &r, &paths);
             Ok(r)
         })
         .collect()
