@@ -105,7 +105,12 @@ pub fn explore(
     bumpers: &BumperConfig,
     truth: Arc<Truth>,
 ) -> Result<ExploreResult, ExploreError> {
-    let robot = robot_with_sensor(scenario, robot, &job.sensor)?;
+    let mut robot = robot_with_sensor(scenario, robot, &job.sensor)?;
+    // The one sensor feeds the bumpers: a radar reads its first echoes, as in a scenario's
+    // own exploration mission.
+    if let Some(s) = robot.sensors.first_mut() {
+        crate::nav::read_first_echoes(&mut s.config);
+    }
     let mission = Mission {
         robot: Some(robot.name.clone()),
         controller_hz: DEFAULT_CONTROLLER_HZ,

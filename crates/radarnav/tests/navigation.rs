@@ -351,3 +351,48 @@ fn exploring_beside_foliage_with_the_radar_never_enters_it() {
         }
     }
 }
+
+#[test]
+fn frontier_exploration_maps_the_trial_maze_and_thicket_with_either_sensor() {
+    use radarnav::compare::{ExploreJob, explore};
+    use radarnav::map::{MapConfig, Truth};
+    use std::sync::Arc;
+    let mut jobs = Vec::new();
+    for map in ["nav/maze", "nav/thicket"] {
+        for sensor in ["radar", "laser"] {
+            jobs.push((map, sensor));
+        }
+    }
+    let failures: Vec<String> = jobs
+        .par_iter()
+        .filter_map(|&(map, sensor)| {
+            let s = Scenario::builtin(map).expect("built-in trial map");
+            let robot = radarnav::compare::robot_with_sensor(&s, None, sensor).expect("sensor");
+            let truth = Arc::new(Truth::of_world(
+                &s.world,
+                MapConfig::default().resolution,
+                robot.sensors[0].mount.z,
+                robot.vehicle,
+                &robot.start,
+            ));
+            let job = ExploreJob {
+                strategy: Strategy::Frontier,
+                sensor: sensor.to_owned(),
+                seed: 1,
+            };
+            let r = explore(&s, None, &job, None, &BumperConfig::default(), truth)
+                .expect("exploration run");
+            let free = r.coverage.last().and_then(|c| c.free).unwrap_or(0.0);
+            (free < 0.95 || r.summary.bumps > 0).then(|| {
+                format!(
+                    "{map} {sensor}: {:.1} % of the free area after {:.1} m, {} bumps, {:?}",
+                    100.0 * free,
+                    r.summary.distance,
+                    r.summary.bumps,
+                    r.summary.outcome
+                )
+            })
+        })
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -6,21 +6,28 @@
 //!   when the front trips it follows the wall for a while, then starts a new spiral;
 //! * `frontier` (Yamauchi 1997): builds its own occupancy grid from its sensors at the pose
 //!   it believes, and drives to the nearest reachable frontier (a sensor-clear cell next to
-//!   an unknown one) along a breadth-first path through clear cells kept the safety distance
-//!   from anything that blocks; it ends the mission when no frontier is reachable.
+//!   unknown ones; for a radar also a place near foliage that borders unknown space, where it
+//!   sees further through) along the cheapest path through clear cells: never nearer to
+//!   anything that blocks than the body's turning circle plus the minimum clearance, and
+//!   dearer the nearer it comes within the follow distance. A robot that starts nearer than
+//!   that may leave the tight zone it stands in. It drives on while the body's corridor ahead
+//!   is free (the bumpers' safety circle is wider than the ways it may take), gives a target
+//!   up when blocked or once reached, and ends the mission when no frontier is reachable.
 
-use std::collections::VecDeque;
+use std::collections::BinaryHeap;
 use std::f64::consts::{PI, TAU};
 
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::bug::MIN_CLEARANCE;
 use super::bumper::{BumperConfig, BumperSensor, BumperState, Bumpers};
 use super::wall_follow::{Side, WallFollower};
 use super::{Behaviour, nav_pose};
 use crate::map::{CellClass, MapConfig, Mapper, PoseSource};
 use crate::pose::wrap_angle;
+use crate::sensor::SensorKind;
 use crate::sim::{ControlInput, Decision, Ending};
 use crate::vehicle::DriveCommand;
 
@@ -54,6 +61,44 @@ const NEIGHBOURS: [(i64, i64); 8] = [
 ];
 /// Look-ahead along the planned path, m.
 const LOOKAHEAD: f64 = 0.6;
+/// How far past the front the body's corridor must be free to drive on, m.
+const AHEAD_CHECK: f64 = 0.25;
+/// Margin round the body in that corridor, m.
+const BODY_MARGIN: f64 = 0.05;
+/// A radar's target near foliage lies within the wanted clearance and this of it, m.
+const FOLIAGE_TARGET: f64 = 1.0;
+/// Unknown space behind foliage worth going nearer for, m².
+const HIDDEN_MIN_AREA: f64 = 4.0;
+/// Extra path cost per metre where the clearance is nil (falling linearly to none at the
+/// wanted clearance): a way twice as long in the open beats a tight one.
+const CLEARANCE_WEIGHT: f64 = 2.0;
+
+/// Clearances of planned paths from anything that blocks, m.
+#[derive(Clone, Copy, Debug)]
+struct Clearance {
+    /// Never less.
+    hard: f64,
+    /// Where there is room.
+    wanted: f64,
+}
+
+/// A cost and a cell, ordered for a min-heap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Cost(f64, usize);
+
+impl Eq for Cost {}
+
+impl Ord for Cost {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+    }
+}
+
+impl PartialOrd for Cost {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
 
 /// An exploration strategy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -185,9 +230,28 @@ impl ExploreController {
         }
     }
 
-    fn frontier_step(&mut self, input: &ControlInput<'_>, b: &Bumpers, blocked: bool) -> Decision {
+    fn frontier_step(&mut self, input: &ControlInput<'_>, b: &Bumpers, bumped: bool) -> Decision {
         let pose = nav_pose(self.mission.pose, input);
-        let keep_off = self.bumpers.reach(input.vehicle) - self.mission.bumpers.band / 2.0;
+        let vehicle = input.vehicle;
+        // The path keeps the follow distance where there is room and never less than the
+        // body's turning circle plus the minimum clearance (the Bug's standoff floor).
+        let clearance = Clearance {
+            hard: 0.5 * vehicle.length.hypot(vehicle.width) + MIN_CLEARANCE,
+            wanted: self.bumpers.follow_radius(vehicle),
+        };
+        // A radar also goes where it sees only through foliage, to see it better.
+        let see_through = input
+            .sensors
+            .iter()
+            .any(|s| s.config.kind == SensorKind::Radar);
+        // Driving on needs the body's own corridor free a little ahead: the bumpers' safety
+        // circle is wider than the ways the path may take.
+        let ahead_free = b.corridor_free(
+            0.0,
+            vehicle.length / 2.0 + AHEAD_CHECK,
+            vehicle.width / 2.0 + BODY_MARGIN,
+        );
+        let blocked = bumped || !ahead_free;
         let speed = self.mission.speed;
         let Some(f) = self.frontier.as_mut() else {
             return Decision::Drive(DriveCommand::STOP);
@@ -209,7 +273,7 @@ impl ExploreController {
         }
         if input.time >= f.next_plan || f.path.is_empty() {
             f.next_plan = input.time + FRONTIER_REPLAN;
-            if f.plan(pose.xy(), keep_off).is_some() {
+            if f.plan(pose.xy(), clearance, see_through).is_some() {
                 f.failing_since = None;
             } else {
                 // A cell needs a few scans to count as clear: give up only when no frontier
@@ -232,6 +296,11 @@ impl ExploreController {
             return Decision::Drive(DriveCommand::STOP);
         };
         if f.path.len() == 1 && (aim - here).length() < 0.3 {
+            // There: if the target is still one at the next plan, looking from here did not
+            // reveal it; do not come back for it.
+            if let Some(t) = f.target.take() {
+                f.rejected.push(t);
+            }
             f.path.clear();
             return Decision::Drive(DriveCommand::STOP);
         }
@@ -242,12 +311,10 @@ impl ExploreController {
         } else {
             speed * err.cos()
         };
-        // Turning on the spot with the front tripped is safe; driving on is not.
-        if front_trips(b) {
-            return Decision::Drive(DriveCommand::twist(
-                0.0,
-                self.mission.follow.sign() * -TURN_RATE,
-            ));
+        if v > 0.0 && !ahead_free {
+            // Something the map missed is in the way: turn toward the path on the spot; the
+            // next plan gives the target up.
+            return Decision::Drive(DriveCommand::twist(0.0, omega));
         }
         Decision::Drive(DriveCommand::twist(v, omega))
     }
@@ -329,7 +396,7 @@ impl Behaviour for ExploreController {
                 }
                 Decision::Drive(self.follower.command(&b, &pose, dt, radius))
             }
-            Phase::Path => self.frontier_step(input, &b, front_blocked),
+            Phase::Path => self.frontier_step(input, &b, bumped),
         }
     }
 }
@@ -362,36 +429,50 @@ impl Frontier {
         }
     }
 
-    /// Plans a path from `from` to the nearest reachable frontier through clear cells at
-    /// least `keep_off` from any blocking cell. `None`: no frontier is reachable.
-    fn plan(&mut self, from: DVec2, keep_off: f64) -> Option<()> {
+    /// Plans a path from `from` to the nearest reachable frontier (by a path cost that grows
+    /// where the clearance falls below `clearance.wanted`) through clear cells at least
+    /// `clearance.hard` from any blocking cell. A robot standing nearer than that to something
+    /// may leave the zone it stands in, never cross another. `None`: no frontier is reachable.
+    ///
+    /// With `see_through`, a reachable cell within the wanted clearance (and a metre) of
+    /// foliage that borders unknown space (of [`HIDDEN_MIN_AREA`] or more) is a target too:
+    /// nearer, a radar sees further through it.
+    fn plan(&mut self, from: DVec2, clearance: Clearance, see_through: bool) -> Option<()> {
         let grid = self.mapper.as_ref()?.grid();
         let (w, h) = (grid.width(), grid.height());
         let res = grid.resolution();
         let (oi, oj) = grid.origin_cell();
         let classes = grid.classes();
-        // Inflate blocking cells by `keep_off` (a disc of cells around each).
-        let r = (keep_off / res).ceil() as i64;
-        let mut inflated = vec![false; w * h];
-        let disc: Vec<(i64, i64)> = (-r..=r)
-            .flat_map(|dj| (-r..=r).map(move |di| (di, dj)))
-            .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * res <= keep_off)
-            .collect();
-        for (k, c) in classes.iter().enumerate() {
-            if c.blocks() {
-                let (i, j) = ((k % w) as i64, (k / w) as i64);
-                for &(di, dj) in &disc {
-                    let (a, b) = (i + di, j + dj);
-                    if a >= 0 && b >= 0 && (a as usize) < w && (b as usize) < h {
-                        inflated[b as usize * w + a as usize] = true;
-                    }
-                }
-            }
-        }
         let at = |i: i64, j: i64| -> Option<usize> {
             (i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h)
                 .then(|| j as usize * w + i as usize)
         };
+        // Distance of every cell to the nearest blocking one, up to the wanted clearance
+        // (a brushfire on the 8-neighbour grid, within a few per cent of Euclidean).
+        let cap = clearance.wanted.max(clearance.hard) + res;
+        let mut dist = vec![f64::INFINITY; w * h];
+        let mut heap = BinaryHeap::new();
+        for (k, c) in classes.iter().enumerate() {
+            if c.blocks() {
+                dist[k] = 0.0;
+                heap.push(Cost(0.0, k));
+            }
+        }
+        while let Some(Cost(d, k)) = heap.pop() {
+            if d > dist[k] || d > cap {
+                continue;
+            }
+            let (i, j) = ((k % w) as i64, (k / w) as i64);
+            for (di, dj) in NEIGHBOURS {
+                if let Some(n) = at(i + di, j + dj) {
+                    let nd = d + res * ((di * di + dj * dj) as f64).sqrt();
+                    if nd < dist[n] {
+                        dist[n] = nd;
+                        heap.push(Cost(nd, n));
+                    }
+                }
+            }
+        }
         let start_cell = grid.cell_of(from);
         let start = at(start_cell.0 - oi, start_cell.1 - oj)?;
         let centre = |k: usize| {
@@ -412,19 +493,94 @@ impl Frontier {
                 .count()
                 >= 3
         };
-        let min_steps = (MIN_FRONTIER_DISTANCE / res).ceil() as u32;
-        let mut steps = vec![0u32; w * h];
+        let tight = |k: usize| dist[k] < clearance.hard;
+        // Distance to foliage (seen through, impassable) that borders unknown space of some
+        // size.
+        let reach = clearance.wanted + FOLIAGE_TARGET;
+        let mut to_foliage = vec![f64::INFINITY; w * h];
+        if see_through {
+            // Unknown regions by size: the inside of a bush the radar never sees into is no
+            // reason to go anywhere.
+            let mut region = vec![usize::MAX; w * h];
+            let mut sizes = Vec::new();
+            for k0 in 0..w * h {
+                if classes[k0] != CellClass::Unknown || region[k0] != usize::MAX {
+                    continue;
+                }
+                let id = sizes.len();
+                let mut stack = vec![k0];
+                region[k0] = id;
+                let mut n = 0usize;
+                while let Some(k) = stack.pop() {
+                    n += 1;
+                    let (i, j) = ((k % w) as i64, (k / w) as i64);
+                    for (di, dj) in &NEIGHBOURS[..4] {
+                        if let Some(m) = at(i + di, j + dj)
+                            && classes[m] == CellClass::Unknown
+                            && region[m] == usize::MAX
+                        {
+                            region[m] = id;
+                            stack.push(m);
+                        }
+                    }
+                }
+                sizes.push(n);
+            }
+            let worth = (HIDDEN_MIN_AREA / (res * res)).ceil() as usize;
+            let mut heap = BinaryHeap::new();
+            for (k, c) in classes.iter().enumerate() {
+                let (i, j) = ((k % w) as i64, (k / w) as i64);
+                if *c == CellClass::SeeThrough
+                    && NEIGHBOURS.iter().any(|(di, dj)| {
+                        at(i + di, j + dj).is_some_and(|n| {
+                            classes[n] == CellClass::Unknown && sizes[region[n]] >= worth
+                        })
+                    })
+                {
+                    to_foliage[k] = 0.0;
+                    heap.push(Cost(0.0, k));
+                }
+            }
+            while let Some(Cost(d, k)) = heap.pop() {
+                if d > to_foliage[k] || d > reach {
+                    continue;
+                }
+                let (i, j) = ((k % w) as i64, (k / w) as i64);
+                for (di, dj) in NEIGHBOURS {
+                    if let Some(n) = at(i + di, j + dj) {
+                        let nd = d + res * ((di * di + dj * dj) as f64).sqrt();
+                        if nd < to_foliage[n] {
+                            to_foliage[n] = nd;
+                            heap.push(Cost(nd, n));
+                        }
+                    }
+                }
+            }
+        }
+        // Path cost: length, times up to 1 + CLEARANCE_WEIGHT where the clearance is below
+        // the wanted one.
+        let step_cost = |n: usize, len: f64| {
+            let short = ((clearance.wanted - dist[n]) / clearance.wanted).clamp(0.0, 1.0);
+            len * (1.0 + CLEARANCE_WEIGHT * short)
+        };
+        let mut cost = vec![f64::INFINITY; w * h];
+        let mut travelled = vec![0.0f64; w * h];
         let mut parent = vec![usize::MAX; w * h];
-        parent[start] = start;
-        // Cells reached through inflated cells only: the robot may leave the inflated zone it
+        // Cells reached through too-tight cells only: the robot may leave the tight zone it
         // stands in, but not cross one.
         let mut escaping = vec![false; w * h];
+        cost[start] = 0.0;
+        parent[start] = start;
         escaping[start] = true;
-        let mut queue = VecDeque::from([start]);
+        let mut queue = BinaryHeap::from([Cost(0.0, start)]);
         let mut found = None;
-        while let Some(k) = queue.pop_front() {
-            if steps[k] >= min_steps
-                && is_frontier(k)
+        while let Some(Cost(c, k)) = queue.pop() {
+            if c > cost[k] {
+                continue;
+            }
+            if travelled[k] >= MIN_FRONTIER_DISTANCE
+                && !tight(k)
+                && (is_frontier(k) || to_foliage[k] <= reach)
                 && !self
                     .rejected
                     .iter()
@@ -435,15 +591,20 @@ impl Frontier {
             }
             let (i, j) = ((k % w) as i64, (k / w) as i64);
             for (di, dj) in NEIGHBOURS {
-                if let Some(n) = at(i + di, j + dj)
-                    && parent[n] == usize::MAX
-                    && classes[n] == CellClass::Clear
-                    && (!inflated[n] || escaping[k])
-                {
-                    escaping[n] = escaping[k] && inflated[n];
-                    steps[n] = steps[k] + 1;
+                let Some(n) = at(i + di, j + dj) else {
+                    continue;
+                };
+                if classes[n] != CellClass::Clear || (tight(n) && !escaping[k]) {
+                    continue;
+                }
+                let len = res * ((di * di + dj * dj) as f64).sqrt();
+                let nc = c + step_cost(n, len);
+                if nc < cost[n] {
+                    cost[n] = nc;
+                    travelled[n] = travelled[k] + len;
                     parent[n] = k;
-                    queue.push_back(n);
+                    escaping[n] = escaping[k] && tight(n);
+                    queue.push(Cost(nc, n));
                 }
             }
         }
@@ -473,6 +634,11 @@ mod tests {
     use crate::pose::Pose;
     use crate::scenario::MountedSensor;
     use crate::sensor::preset;
+
+    const HALF_METRE: Clearance = Clearance {
+        hard: 0.5,
+        wanted: 0.5,
+    };
 
     /// A frontier planner whose map holds five scans from the origin of a 3 m ring of walls,
     /// open (no return) for |azimuth| < `gap_deg`.
@@ -507,33 +673,42 @@ mod tests {
     #[test]
     fn the_nearest_frontier_is_where_the_walls_open() {
         let mut f = planner(20.0);
-        assert!(f.plan(DVec2::ZERO, 0.5).is_some());
+        assert!(f.plan(DVec2::ZERO, HALF_METRE, false).is_some());
         let t = f.target.unwrap();
         // Beyond the ring's radius, inside the opening.
         assert!(
             t.length() > 2.9 && t.to_angle().abs().to_degrees() < 21.0,
             "{t}"
         );
-        // The path starts near the robot, ends at the target and keeps off the walls.
+        // The path starts near the robot, ends at the target and keeps the hard clearance
+        // (less half a cell) from the ring's wall.
         assert!(f.path[0].length() < 0.5 && *f.path.last().unwrap() == t);
+        for p in &f.path {
+            for a in (40..=680).map(|h| f64::from(h) / 2.0) {
+                let wall = DVec2::from_angle(a.to_radians()) * 3.0;
+                assert!((*p - wall).length() >= 0.45, "{p} near the wall at {a}°");
+            }
+        }
+        // Starting 0.3 m from the wall, inside the hard clearance: it leaves that zone.
+        let mut near = planner(20.0);
         assert!(
-            f.path
-                .iter()
-                .all(|p| p.length() < 2.6 || p.to_angle().abs() < 0.35)
+            near.plan(DVec2::new(-2.7, 0.0), HALF_METRE, false)
+                .is_some()
         );
+        assert!(near.target.unwrap().to_angle().abs().to_degrees() < 21.0);
         // A rejected target is not chosen again.
         f.rejected.push(t);
-        assert!(f.plan(DVec2::ZERO, 0.5).is_some());
+        assert!(f.plan(DVec2::ZERO, HALF_METRE, false).is_some());
         assert!((f.target.unwrap() - t).length() >= 1.0);
     }
 
     #[test]
     fn a_closed_ring_has_no_frontier() {
         let mut f = planner(0.0);
-        assert!(f.plan(DVec2::ZERO, 0.5).is_none());
+        assert!(f.plan(DVec2::ZERO, HALF_METRE, false).is_none());
         // Nor does a ring whose opening is narrower than the robot's keep-off circle.
         let mut narrow = planner(4.0);
-        assert!(narrow.plan(DVec2::ZERO, 0.5).is_none());
+        assert!(narrow.plan(DVec2::ZERO, HALF_METRE, false).is_none());
     }
 
     #[test]
