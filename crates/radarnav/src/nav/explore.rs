@@ -401,6 +401,37 @@ impl Behaviour for ExploreController {
     }
 }
 
+/// Distance of every cell of a `w` × `h` grid of `res`-metre cells to the nearest of `seeds`
+/// (cell indices), out to `cap` metres (farther: infinite): a brushfire on the 8-neighbour
+/// grid, within a few per cent of Euclidean.
+fn brushfire(seeds: &[usize], w: usize, h: usize, res: f64, cap: f64) -> Vec<f64> {
+    let mut dist = vec![f64::INFINITY; w * h];
+    let mut heap = BinaryHeap::new();
+    for &k in seeds {
+        dist[k] = 0.0;
+        heap.push(Cost(0.0, k));
+    }
+    while let Some(Cost(d, k)) = heap.pop() {
+        if d > dist[k] || d > cap {
+            continue;
+        }
+        let (i, j) = ((k % w) as i64, (k / w) as i64);
+        for (di, dj) in NEIGHBOURS {
+            let (a, b) = (i + di, j + dj);
+            if a < 0 || b < 0 || a as usize >= w || b as usize >= h {
+                continue;
+            }
+            let n = b as usize * w + a as usize;
+            let nd = d + res * ((di * di + dj * dj) as f64).sqrt();
+            if nd < dist[n] {
+                dist[n] = nd;
+                heap.push(Cost(nd, n));
+            }
+        }
+    }
+    dist
+}
+
 /// The frontier strategy's map and plan.
 #[derive(Clone, Debug)]
 struct Frontier {
@@ -447,32 +478,10 @@ impl Frontier {
             (i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h)
                 .then(|| j as usize * w + i as usize)
         };
-        // Distance of every cell to the nearest blocking one, up to the wanted clearance
-        // (a brushfire on the 8-neighbour grid, within a few per cent of Euclidean).
+        // Distance of every cell to the nearest blocking one, up to the wanted clearance.
         let cap = clearance.wanted.max(clearance.hard) + res;
-        let mut dist = vec![f64::INFINITY; w * h];
-        let mut heap = BinaryHeap::new();
-        for (k, c) in classes.iter().enumerate() {
-            if c.blocks() {
-                dist[k] = 0.0;
-                heap.push(Cost(0.0, k));
-            }
-        }
-        while let Some(Cost(d, k)) = heap.pop() {
-            if d > dist[k] || d > cap {
-                continue;
-            }
-            let (i, j) = ((k % w) as i64, (k / w) as i64);
-            for (di, dj) in NEIGHBOURS {
-                if let Some(n) = at(i + di, j + dj) {
-                    let nd = d + res * ((di * di + dj * dj) as f64).sqrt();
-                    if nd < dist[n] {
-                        dist[n] = nd;
-                        heap.push(Cost(nd, n));
-                    }
-                }
-            }
-        }
+        let blocking: Vec<usize> = (0..w * h).filter(|&k| classes[k].blocks()).collect();
+        let dist = brushfire(&blocking, w, h, res, cap);
         let start_cell = grid.cell_of(from);
         let start = at(start_cell.0 - oi, start_cell.1 - oj)?;
         let centre = |k: usize| {
@@ -497,7 +506,7 @@ impl Frontier {
         // Distance to foliage (seen through, impassable) that borders unknown space of some
         // size.
         let reach = clearance.wanted + FOLIAGE_TARGET;
-        let mut to_foliage = vec![f64::INFINITY; w * h];
+        let mut to_foliage = Vec::new();
         if see_through {
             // Unknown regions by size: the inside of a bush the radar never sees into is no
             // reason to go anywhere.
@@ -527,35 +536,18 @@ impl Frontier {
                 sizes.push(n);
             }
             let worth = (HIDDEN_MIN_AREA / (res * res)).ceil() as usize;
-            let mut heap = BinaryHeap::new();
-            for (k, c) in classes.iter().enumerate() {
-                let (i, j) = ((k % w) as i64, (k / w) as i64);
-                if *c == CellClass::SeeThrough
-                    && NEIGHBOURS.iter().any(|(di, dj)| {
-                        at(i + di, j + dj).is_some_and(|n| {
-                            classes[n] == CellClass::Unknown && sizes[region[n]] >= worth
+            let foliage: Vec<usize> = (0..w * h)
+                .filter(|&k| {
+                    let (i, j) = ((k % w) as i64, (k / w) as i64);
+                    classes[k] == CellClass::SeeThrough
+                        && NEIGHBOURS.iter().any(|(di, dj)| {
+                            at(i + di, j + dj).is_some_and(|n| {
+                                classes[n] == CellClass::Unknown && sizes[region[n]] >= worth
+                            })
                         })
-                    })
-                {
-                    to_foliage[k] = 0.0;
-                    heap.push(Cost(0.0, k));
-                }
-            }
-            while let Some(Cost(d, k)) = heap.pop() {
-                if d > to_foliage[k] || d > reach {
-                    continue;
-                }
-                let (i, j) = ((k % w) as i64, (k / w) as i64);
-                for (di, dj) in NEIGHBOURS {
-                    if let Some(n) = at(i + di, j + dj) {
-                        let nd = d + res * ((di * di + dj * dj) as f64).sqrt();
-                        if nd < to_foliage[n] {
-                            to_foliage[n] = nd;
-                            heap.push(Cost(nd, n));
-                        }
-                    }
-                }
-            }
+                })
+                .collect();
+            to_foliage = brushfire(&foliage, w, h, res, reach);
         }
         // Path cost: length, times up to 1 + CLEARANCE_WEIGHT where the clearance is below
         // the wanted one.
@@ -580,7 +572,7 @@ impl Frontier {
             }
             if travelled[k] >= MIN_FRONTIER_DISTANCE
                 && !tight(k)
-                && (is_frontier(k) || to_foliage[k] <= reach)
+                && (is_frontier(k) || to_foliage.get(k).is_some_and(|&d| d <= reach))
                 && !self
                     .rejected
                     .iter()
