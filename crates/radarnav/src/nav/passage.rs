@@ -67,10 +67,9 @@ pub struct Gap {
 impl Gap {
     /// This robot-frame gap in the frame the robot's `pose` is given in (the world).
     pub fn in_frame(&self, pose: &Pose) -> Gap {
-        let frame = pose;
-        let r = DVec2::from_angle(frame.yaw);
+        let r = DVec2::from_angle(pose.yaw);
         Gap {
-            mid: frame.xy() + r.rotate(self.mid),
+            mid: pose.xy() + r.rotate(self.mid),
             normal: r.rotate(self.normal),
             width: self.width,
         }
@@ -225,7 +224,7 @@ impl Passage {
     /// Takes a newer sighting of the same gap (world frame), keeping its direction, until the
     /// robot has lined up with it: from then on the line through the gap stays put (the
     /// narrowest pair across a thick doorway may come from either of its ends).
-    pub fn refine(&mut self, seen: &Gap) -> bool {
+    pub fn refine(&mut self, seen: &Gap) {
         let same = self.phase == Phase::Approach
             && (seen.mid - self.gap.mid).length() < 0.3
             && seen.normal.dot(self.gap.normal).abs() > REFINE_COS;
@@ -237,7 +236,6 @@ impl Passage {
             };
             self.gap = Gap { normal, ..*seen };
         }
-        same
     }
 
     /// The next move from the believed `pose` with the latest robot-frame returns `points`,
@@ -397,8 +395,7 @@ mod tests {
             (DVec2::new(1.0, -2.0), DVec2::new(8.0, -2.0)),
         ];
         assert_eq!(find_gap(&scan(&walls), -1.0, 3.0, 1.5, 0.71, 3.0), None);
-        // With the step open (no wall beyond), nothing is near enough to make a gap either;
-        // with a post 0.9 m past the end, seen through the open space, there is one.
+        // With a post 0.85 m past the end instead, seen through the open space, there is one.
         let post = [walls[0], (DVec2::new(1.85, -1.0), DVec2::new(1.85, -1.3))];
         let g = find_gap(&scan(&post), -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
         assert!((g.width - 0.85).abs() < 0.05, "{g:?}");
