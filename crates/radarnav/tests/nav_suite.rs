@@ -50,6 +50,10 @@ fn the_geometry_tells_reachable_from_closed_maps() {
     assert_eq!(reach("nav/pen-goal"), [false, false]);
     assert_eq!(reach("nav/pen-start"), [false, false]);
     assert_eq!(reach("nav/doorway"), [true, true]);
+    assert_eq!(reach("nav/diag-door"), [true, true]);
+    assert_eq!(reach("nav/crate-gap"), [true, true]);
+    // Wider than the robot, narrower than its turning circle.
+    assert_eq!(reach("nav/door-narrow"), [false, false]);
     // Smoke is a wall to the laser only.
     assert_eq!(reach("nav/smoke-band"), [true, false]);
     assert_eq!(reach("nav/smoke-cloud"), [true, true]);

@@ -18,7 +18,8 @@
 //!
 //! The goal is reached within `tolerance` of it. The pose used is the odometry, or the true
 //! pose when the mission asks for it; "back at the hit point" means within
-//! `loop_tolerance` after having been at least twice that far away from it, or within
+//! `loop_tolerance` after having been at least twice that far away from it, going the way
+//! the boundary was followed there at first, or within
 //! `loop_tolerance` of any point of the path followed at least one small loop ago, going the
 //! same way (see `Boundary::closes_loop`).
 //!
@@ -32,6 +33,10 @@
 //!   distance shrinks to 0.6 of itself, down to the robot's half-diagonal plus
 //!   [`MIN_CLEARANCE`], and the Bug starts again where the robot is (a new m-line for Bug2).
 //!   Only at the floor is `no_path` reported. The retries are in the report.
+//! * a robot that has not got [`STILL_RADIUS`] from one place in [`STILL_TIME`] (turning on
+//!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
+//!   a corner) has met a `no_path` condition too, and retries with a smaller standoff;
+//! * coming back past the hit point the other way (out of a dead end) closes no loop.
 
 use glam::DVec2;
 use serde::Serialize;
@@ -66,6 +71,11 @@ const TRAIL_STEP: f64 = 0.2;
 const SAME_WAY: f64 = 1.05;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
+/// A robot that stays within this distance of one place ...
+const STILL_RADIUS: f64 = 0.3;
+/// ... for this long is stuck (turning on the spot between sides nearer than its standoff,
+/// or bumping to and fro in a corner), s: a `no_path` condition.
+const STILL_TIME: f64 = 30.0;
 
 /// The safety distance a standoff retry tries after `safety`, or `None` at the floor (the
 /// robot's half-diagonal plus [`MIN_CLEARANCE`]).
@@ -168,7 +178,9 @@ enum Mode {
 struct Boundary {
     hit: DVec2,
     hit_goal_dist: f64,
-    away: bool,
+    /// Distance followed when the robot first got twice the loop tolerance from the hit
+    /// point (`None` before).
+    away: Option<f64>,
     /// Bug1: closest point to the goal so far, its distance and the boundary distance
     /// from the hit point at which it was met.
     closest: (DVec2, f64, f64),
@@ -193,8 +205,9 @@ struct Boundary {
 
 impl Boundary {
     /// Whether the robot at `p` heading `yaw` has closed a loop: back within `tol` of the hit
-    /// point after having been away, or within `tol` of its own followed path, going the same
-    /// way, at least `min_cycle` metres of following ago. The second catches a loop that
+    /// point after having been away, going the way it followed there before, or within `tol`
+    /// of its own followed path, going the same way, at least `min_cycle` metres of following
+    /// ago. The second catches a loop that
     /// passes the hit point wide (the hit point lies where the bumper first tripped, nearer
     /// the obstacle than the settled path; odometry drifts) and a loop on a boundary the
     /// follower took up instead of the one it hit.
@@ -207,12 +220,27 @@ impl Boundary {
             self.trail.push((p, yaw, self.travelled));
         }
         let old = self.travelled - min_cycle;
-        (self.away && (p - self.hit).length() <= tol)
+        // The sample at the hit point itself holds the heading the robot met the obstacle
+        // with, not a way along the boundary.
+        let same_way = |s: &&(DVec2, f64, f64)| {
+            s.2 > 0.0 && (s.0 - p).length() <= tol && wrap_angle(s.1 - yaw).abs() <= SAME_WAY
+        };
+        // Back at the hit point going the way the boundary was first followed there: coming
+        // back the other way is the return from a dead end (a corridor narrower than twice
+        // the tolerance), not a loop.
+        let first = self.away.unwrap_or(f64::NEG_INFINITY);
+        let back_at_hit = (p - self.hit).length() <= tol
+            && self
+                .trail
+                .iter()
+                .take_while(|s| s.2 <= first)
+                .any(|s| same_way(&s));
+        back_at_hit
             || self
                 .trail
                 .iter()
                 .take_while(|s| s.2 <= old)
-                .any(|s| (s.0 - p).length() <= tol && wrap_angle(s.1 - yaw).abs() <= SAME_WAY)
+                .any(|s| same_way(&s))
     }
 }
 
@@ -228,6 +256,8 @@ pub struct BugController {
     last: Option<DVec2>,
     /// Bug1: the last leave point and its distance to the goal.
     last_leave: Option<(DVec2, f64)>,
+    /// Where the robot last stood still and since when (s): the no-progress watchdog.
+    still: Option<(DVec2, f64)>,
     report: BugReport,
 }
 
@@ -249,6 +279,7 @@ impl BugController {
             start: None,
             last: None,
             last_leave: None,
+            still: None,
             report,
         }
     }
@@ -329,6 +360,14 @@ impl Behaviour for BugController {
         if goal_dist <= self.mission.tolerance {
             return self.end(Ending::Reached, "goal reached");
         }
+        let (anchor, since) = *self.still.get_or_insert((p, input.time));
+        if (p - anchor).length() > STILL_RADIUS {
+            self.still = Some((p, input.time));
+        } else if input.time - since > STILL_TIME {
+            self.still = None;
+            let reason = format!("stuck: no progress for {STILL_TIME} s at this standoff");
+            return self.no_path(&reason, p, vehicle);
+        }
         let dt = 1.0 / self.rate_hz;
         let radius = self.bumpers.follow_radius(vehicle);
         let reach = self.bumpers.reach(vehicle);
@@ -389,7 +428,7 @@ impl Behaviour for BugController {
                     self.mode = Mode::Follow(Boundary {
                         hit: p,
                         hit_goal_dist: goal_dist,
-                        away: false,
+                        away: None,
                         closest: (p, goal_dist, 0.0),
                         travelled: 0.0,
                         about_turn: 0.0,
@@ -419,7 +458,7 @@ impl Behaviour for BugController {
                 bd.travelled += step;
                 let from_hit = (p - bd.hit).length();
                 if from_hit > 2.0 * tol {
-                    bd.away = true;
+                    bd.away.get_or_insert(bd.travelled);
                 }
                 let looped = !bd.circled && bd.closes_loop(p, pose.yaw, tol, min_cycle);
                 if looped {
@@ -429,7 +468,7 @@ impl Behaviour for BugController {
                     BugAlgorithm::Bug1 => {
                         // Points met while turning away at the hit point are not on the
                         // followed path: candidates start once the robot has left it.
-                        if !bd.circled && bd.away && goal_dist < bd.closest.1 {
+                        if !bd.circled && bd.away.is_some() && goal_dist < bd.closest.1 {
                             bd.closest = (p, goal_dist, bd.travelled);
                         }
                         if looped {
@@ -493,14 +532,15 @@ impl Behaviour for BugController {
                         let near = side.abs() <= self.mission.mline_tolerance;
                         // Entering the tolerance band, or jumping across the line between
                         // two calls; leaving the band on the far side is the same crossing.
-                        let crossed =
-                            within && !bd.on_mline && (near || side.signum() != prev_side.signum());
-                        bd.on_mline = near;
-                        if crossed {
+                        let on = within && (near || side.signum() != prev_side.signum());
+                        if on && !bd.on_mline {
                             self.report.mline_crossings += 1;
-                            if goal_dist < bd.hit_goal_dist - CLOSER_BY {
-                                bd.leave = true;
-                            }
+                        }
+                        bd.on_mline = near;
+                        // Staying on the line counts as well: a gap that lies on it is
+                        // passed along the line, never entering the band from outside.
+                        if on && goal_dist < bd.hit_goal_dist - CLOSER_BY {
+                            bd.leave = true;
                         }
                         // A crossing inside a gap being passed is left from once through.
                         if bd.leave && !passing {
@@ -523,5 +563,81 @@ impl Behaviour for BugController {
                 Decision::Drive(self.follower.command(&b, &pose, dt, radius))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    use super::*;
+
+    fn boundary(hit: DVec2) -> Boundary {
+        Boundary {
+            hit,
+            hit_goal_dist: 10.0,
+            away: None,
+            closest: (hit, 10.0, 0.0),
+            travelled: 0.0,
+            about_turn: 0.0,
+            leave_at: f64::INFINITY,
+            circled: false,
+            away_from_closest: false,
+            on_mline: true,
+            leave: false,
+            trail: Vec::new(),
+        }
+    }
+
+    /// Follows `path` (points and headings) in steps of 5 cm as the controller does and
+    /// returns where a loop closed first.
+    fn first_loop(bd: &mut Boundary, path: &[(DVec2, f64)]) -> Option<DVec2> {
+        let (tol, min_cycle) = (0.75, 9.5);
+        let mut last = path[0].0;
+        for w in path.windows(2) {
+            let ((a, yaw), (b, _)) = (w[0], w[1]);
+            let n = ((b - a).length() / 0.05).ceil().max(1.0) as usize;
+            for i in 1..=n {
+                let p = a + (b - a) * (i as f64 / n as f64);
+                bd.travelled += (p - last).length();
+                last = p;
+                if (p - bd.hit).length() > 2.0 * tol {
+                    bd.away.get_or_insert(bd.travelled);
+                }
+                if bd.closes_loop(p, yaw, tol, min_cycle) {
+                    return Some(p);
+                }
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn coming_back_out_of_a_dead_end_past_the_hit_point_closes_no_loop() {
+        // Up a corridor from the hit point, back down past it (0.3 m off) and on.
+        let hit = DVec2::new(1.0, 1.0);
+        let path = [
+            (hit, FRAC_PI_2),
+            (DVec2::new(1.0, 12.0), -FRAC_PI_2),
+            (DVec2::new(0.8, 1.3), 0.0),
+            (DVec2::new(8.0, 0.9), 0.0),
+        ];
+        assert_eq!(first_loop(&mut boundary(hit), &path), None);
+    }
+
+    #[test]
+    fn a_loop_back_to_the_hit_point_the_same_way_closes() {
+        // Round a 6 m square from the hit point, anticlockwise, and on past it.
+        let hit = DVec2::ZERO;
+        let path = [
+            (hit, 0.0),
+            (DVec2::new(6.0, 0.0), FRAC_PI_2),
+            (DVec2::new(6.0, 6.0), PI),
+            (DVec2::new(0.0, 6.0), -FRAC_PI_2),
+            (DVec2::new(0.0, 0.0), 0.0),
+            (DVec2::new(3.0, 0.0), 0.0),
+        ];
+        let at = first_loop(&mut boundary(hit), &path).expect("loop");
+        assert!(at.length() < 0.8, "{at}");
     }
 }

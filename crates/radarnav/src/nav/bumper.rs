@@ -184,6 +184,8 @@ pub struct Bumpers {
     /// Every return in the robot frame (below-minimum ranges at the centre), for the
     /// corridor checks.
     points: Vec<DVec2>,
+    /// The sensor's position in the robot frame, m.
+    origin: DVec2,
 }
 
 impl Bumpers {
@@ -243,6 +245,7 @@ impl Bumpers {
             states,
             nearest,
             points,
+            origin: DVec2::new(mount.x, mount.y),
         }
     }
 
@@ -260,6 +263,11 @@ impl Bumpers {
     /// Every return in the robot frame, in scan order.
     pub fn points(&self) -> &[DVec2] {
         &self.points
+    }
+
+    /// Where the rays start in the robot frame (the sensor's mount), m.
+    pub fn origin(&self) -> DVec2 {
+        self.origin
     }
 
     /// Time of the scan these bumpers come from, s.

@@ -17,6 +17,16 @@
 //! of the gap's middle, turn to face through it, and drive through on the line through its
 //! middle, slowly, with the body's own clearance as the only check. The gap is held in the
 //! world frame (the believed pose), so scans at a low rate do not leave it behind.
+//!
+//! A gap is often the mouth of a longer way between two sides (a crate 1.5 m long beside a
+//! wall, a corridor): beyond the gap the robot drives on centred between them while they are
+//! nearer together than twice the follow radius, turns about on the spot at a dead end and
+//! comes back out the same way (which is how the boundary goes on), and hands back to the
+//! follower where the way widens.
+//!
+//! Returns are taken in the order the sensor's rays swept (by angle about the sensor, not the
+//! robot's centre), and the gap's width is counted half a ray spacing narrower at each end:
+//! each end lies somewhere between its last return and the next ray, which passed.
 
 use glam::DVec2;
 
@@ -76,12 +86,13 @@ impl Gap {
     }
 }
 
-/// The gap on the followed side among robot-frame `points` (see the module docs): `side` is
-/// +1 with the boundary on the left, −1 on the right; returns beyond `look` are ignored, the
-/// followed boundary must come within `near`, and the gap's width must lie in
-/// `[min_width, max_width)`.
+/// The gap on the followed side among robot-frame `points` seen from the sensor at
+/// robot-frame `origin` (see the module docs): `side` is +1 with the boundary on the left,
+/// −1 on the right; returns beyond `look` are ignored, the followed boundary must come within
+/// `near`, and the gap's width must lie in `[min_width, max_width)`.
 pub fn find_gap(
     points: &[DVec2],
+    origin: DVec2,
     side: f64,
     look: f64,
     near: f64,
@@ -90,13 +101,18 @@ pub fn find_gap(
 ) -> Option<Gap> {
     // Mirror so the boundary is on the right; angles then run from behind it forward. The
     // segments are made of every return, near or far: cutting them at the look radius would
-    // open gaps that are not there (a concave corner just beyond it).
+    // open gaps that are not there (a concave corner just beyond it). Angles are taken about
+    // the sensor, in the order its rays swept: about the robot's centre, a far return seen
+    // past an edge can fall between the near returns of that edge (parallax) and cut a
+    // wall's end off as a segment of its own.
     let flip = DVec2::new(1.0, -side.signum());
+    let o = origin * flip;
     let mut q: Vec<(f64, DVec2)> = points
         .iter()
         .map(|p| {
             let m = *p * flip;
-            (m.y.atan2(m.x), m)
+            let d = m - o;
+            (d.y.atan2(d.x), m)
         })
         .collect();
     q.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -140,7 +156,12 @@ pub fn find_gap(
             }
         }
     }
-    let width = best.sqrt();
+    // Each end of the gap lies somewhere between its last return and the next ray, which
+    // passed: half a ray spacing on average. Counted against the width, so that a gap
+    // narrower than the robot's turning circle does not pass for one when seen from afar.
+    let step = ray_spacing(&q);
+    let span = best.sqrt();
+    let width = span - 0.5 * step * ((pair.0 - o).length() + (pair.1 - o).length());
     if !(min_width..max_width).contains(&width) {
         return None;
     }
@@ -149,15 +170,16 @@ pub fn find_gap(
     // spheres of a hedge seen end-on), and hidden space is no way through.
     for k in 1..GAP_SAMPLES {
         let c = pair.0 + (pair.1 - pair.0) * (k as f64 / GAP_SAMPLES as f64);
+        let c = c - o;
         let (dir, dist) = (c.y.atan2(c.x), c.length());
         if q.iter()
-            .any(|(a, p)| wrap_angle(a - dir).abs() < SEEN_WITHIN && p.length() < dist)
+            .any(|(a, p)| wrap_angle(a - dir).abs() < SEEN_WITHIN && (*p - o).length() < dist)
         {
             return None;
         }
     }
     let mid = (pair.0 + pair.1) / 2.0;
-    let across = (pair.1 - pair.0) / width;
+    let across = (pair.1 - pair.0) / span;
     let mut normal = across.perp();
     // Away from the robot; for a gap beside it (a corridor), forward.
     if normal.dot(mid + DVec2::new(0.3, 0.0)) < 0.0 {
@@ -180,11 +202,25 @@ pub fn find_gap(
     })
 }
 
+/// The median angle between neighbouring returns sorted by angle: the sensor's ray spacing
+/// (rays that return nothing leave larger steps, which the median ignores), rad.
+fn ray_spacing(q: &[(f64, DVec2)]) -> f64 {
+    let mut steps: Vec<f64> = q.windows(2).map(|w| w[1].0 - w[0].0).collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Phase {
     Approach,
     Align,
     Pass,
+    /// Past the narrowest pair but still between two sides nearer together than the
+    /// follower's circle (the gap is the mouth of a passage: a crate's length, a corridor).
+    Through,
 }
 
 /// Driving through one gap (see the module docs).
@@ -193,6 +229,11 @@ pub struct Passage {
     gap: Gap,
     phase: Phase,
     time: f64,
+    narrow: f64,
+    /// Cruise speed between the sides, m/s.
+    cruise: f64,
+    /// Turn left still to make on the spot at a dead end, rad.
+    about: f64,
 }
 
 /// What a passage step asks for.
@@ -207,12 +248,18 @@ pub enum PassStep {
 }
 
 impl Passage {
-    /// A passage through the world-frame `gap`.
-    pub fn new(gap: Gap) -> Self {
+    /// A passage through the world-frame `gap`. Beyond the gap the robot goes on between
+    /// the sides, centred, while they are nearer together than `narrow` metres (where the
+    /// wall follower cannot keep its distance to one without coming too close to the other),
+    /// at up to `cruise` m/s.
+    pub fn new(gap: Gap, narrow: f64, cruise: f64) -> Self {
         Self {
             gap,
             phase: Phase::Approach,
             time: 0.0,
+            narrow,
+            cruise,
+            about: 0.0,
         }
     }
 
@@ -249,7 +296,7 @@ impl Passage {
         dt: f64,
     ) -> PassStep {
         self.time += dt;
-        if self.time > PASS_TIMEOUT {
+        if self.time > PASS_TIMEOUT && self.phase != Phase::Through {
             return PassStep::Blocked;
         }
         let g = &self.gap;
@@ -293,13 +340,40 @@ impl Passage {
                     )
                 }
             }
-            Phase::Pass => {
-                if t > length / 2.0 + 0.3 {
-                    return PassStep::Done;
-                }
+            Phase::Pass if t <= length / 2.0 + 0.3 => {
                 let err = heading_to(g.mid + g.normal * (t + LOOK_AHEAD));
                 (
                     PASS_SPEED * err.cos().max(0.0),
+                    (K_HEADING * err).clamp(-PASS_TURN, PASS_TURN),
+                )
+            }
+            Phase::Pass | Phase::Through => {
+                self.phase = Phase::Through;
+                // The nearest sides beside the body and a little ahead, left and right.
+                let (mut left, mut right) = (f64::INFINITY, f64::INFINITY);
+                for q in points {
+                    if (-length / 2.0..=length / 2.0 + LOOK_AHEAD).contains(&q.x) {
+                        if q.y >= 0.0 {
+                            left = left.min(q.y);
+                        } else {
+                            right = right.min(-q.y);
+                        }
+                    }
+                }
+                if left + right >= self.narrow && self.about <= 0.0 {
+                    return PassStep::Done;
+                }
+                // Steer for the middle a look-ahead on, at the cruise speed where the way
+                // ahead is open and slowing down toward an end.
+                let err = (0.5 * (left - right)).atan2(LOOK_AHEAD);
+                let free = points
+                    .iter()
+                    .filter(|q| q.x > 0.0 && q.y.abs() <= width / 2.0 + BODY_MARGIN)
+                    .map(|q| q.x - length / 2.0)
+                    .fold(f64::INFINITY, f64::min);
+                let speed = (0.5 * free).clamp(BACK_SPEED, self.cruise.max(PASS_SPEED));
+                (
+                    speed * err.cos().max(0.0),
                     (K_HEADING * err).clamp(-PASS_TURN, PASS_TURN),
                 )
             }
@@ -317,6 +391,18 @@ impl Passage {
             clear(&|q| q.x >= -half.0 - 0.1 && q.x <= half.0 + BODY_MARGIN && q.y.abs() <= half.1);
         let turn_radius = 0.5 * length.hypot(width) + BODY_MARGIN;
         let turn_clear = clear(&|q| q.length() <= turn_radius);
+        // A dead end between the sides: turn about on the spot and go back out between
+        // them, which is how the boundary goes on (round the end, along the other side).
+        if self.phase == Phase::Through && (self.about > 0.0 || v > 0.0 && !ahead_clear) {
+            if !turn_clear {
+                return PassStep::Blocked;
+            }
+            if self.about <= 0.0 {
+                self.about = std::f64::consts::PI;
+            }
+            self.about -= PASS_TURN * dt;
+            return PassStep::Drive(0.0, PASS_TURN);
+        }
         if v > 0.0 && !ahead_clear || v == 0.0 && omega != 0.0 && !turn_clear {
             // Straighten up on the spot if that is clear, else back out along the way in.
             if v > 0.0 && turn_clear && omega != 0.0 {
@@ -333,6 +419,8 @@ impl Passage {
 
 #[cfg(test)]
 mod tests {
+    use std::f64::consts::FRAC_PI_2;
+
     use super::*;
 
     /// Returns every 1° seen from the origin of the robot frame of walls given as segments.
@@ -369,21 +457,27 @@ mod tests {
     #[test]
     fn a_doorway_on_the_followed_side_is_found_and_oriented_through() {
         let pts = scan(&doorway(0.8));
-        let g = find_gap(&pts, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
+        let g = find_gap(&pts, DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
         assert!((g.width - 0.8).abs() < 0.05, "{g:?}");
         assert!((g.mid - DVec2::new(1.4, -1.0)).length() < 0.05, "{g:?}");
         assert!((g.normal - DVec2::new(0.0, -1.0)).length() < 1e-9, "{g:?}");
         // On the other side it is not the followed boundary's gap.
-        assert_eq!(find_gap(&pts, 1.0, 3.0, 1.5, 0.71, 3.0), None);
+        assert_eq!(find_gap(&pts, DVec2::ZERO, 1.0, 3.0, 1.5, 0.71, 3.0), None);
         // Narrower than the robot can turn in, or wider than the follower's circle: none.
         assert_eq!(
-            find_gap(&scan(&doorway(0.6)), -1.0, 3.0, 1.5, 0.71, 3.0),
+            find_gap(&scan(&doorway(0.6)), DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0),
             None
         );
-        assert_eq!(find_gap(&pts, -1.0, 3.0, 1.5, 0.71, 0.75), None);
+        assert_eq!(
+            find_gap(&pts, DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 0.75),
+            None
+        );
         // A straight wall has no gap.
         let wall = [(DVec2::new(-5.0, -1.0), DVec2::new(8.0, -1.0))];
-        assert_eq!(find_gap(&scan(&wall), -1.0, 3.0, 1.5, 0.71, 3.0), None);
+        assert_eq!(
+            find_gap(&scan(&wall), DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0),
+            None
+        );
     }
 
     #[test]
@@ -394,44 +488,116 @@ mod tests {
             (DVec2::new(-5.0, -1.0), DVec2::new(1.0, -1.0)),
             (DVec2::new(1.0, -2.0), DVec2::new(8.0, -2.0)),
         ];
-        assert_eq!(find_gap(&scan(&walls), -1.0, 3.0, 1.5, 0.71, 3.0), None);
+        assert_eq!(
+            find_gap(&scan(&walls), DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0),
+            None
+        );
         // With a post 0.85 m past the end instead, seen through the open space, there is one.
         let post = [walls[0], (DVec2::new(1.85, -1.0), DVec2::new(1.85, -1.3))];
-        let g = find_gap(&scan(&post), -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
+        let g = find_gap(&scan(&post), DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
         assert!((g.width - 0.85).abs() < 0.05, "{g:?}");
     }
 
+    /// Returns every `step_deg` degrees seen from the robot-frame `origin`, in the robot
+    /// frame, of walls given as segments.
+    fn scan_from(walls: &[(DVec2, DVec2)], origin: DVec2, step_deg: f64) -> Vec<DVec2> {
+        let local: Vec<(DVec2, DVec2)> = walls
+            .iter()
+            .map(|&(a, b)| (a - origin, b - origin))
+            .collect();
+        let n = (360.0 / step_deg).round() as usize;
+        (0..n)
+            .filter_map(|i| {
+                let u = DVec2::from_angle((i as f64 * step_deg - 180.0).to_radians());
+                local
+                    .iter()
+                    .filter_map(|&(a, b)| {
+                        let d = b - a;
+                        let den = u.perp_dot(d);
+                        if den.abs() < 1e-12 {
+                            return None;
+                        }
+                        let t = a.perp_dot(d) / den;
+                        let s = a.perp_dot(u) / den;
+                        (t > 0.0 && (0.0..=1.0).contains(&s)).then_some(t)
+                    })
+                    .min_by(f64::total_cmp)
+                    .map(|t| origin + u * t)
+            })
+            .collect()
+    }
+
+    /// The four sides of the rectangle between corners `a` and `b`.
+    fn rect(a: DVec2, b: DVec2) -> [(DVec2, DVec2); 4] {
+        let (c, d) = (DVec2::new(b.x, a.y), DVec2::new(a.x, b.y));
+        [(a, c), (c, b), (b, d), (d, a)]
+    }
+
+    /// `walls` (world frame) in the frame of a robot at `pose`.
+    fn local(walls: &[(DVec2, DVec2)], pose: &Pose) -> Vec<(DVec2, DVec2)> {
+        let r = DVec2::from_angle(-pose.yaw);
+        walls
+            .iter()
+            .map(|&(a, b)| (r.rotate(a - pose.xy()), r.rotate(b - pose.xy())))
+            .collect()
+    }
+
     #[test]
-    fn a_passage_goes_through_a_doorway_without_touching_it() {
-        // The robot follows the wall on its right, 0.9 m off, 1 m before the doorway.
-        let walls = doorway(0.8);
+    fn a_thick_doorway_seen_by_an_off_centre_laser_has_its_true_width() {
+        // A room wall 0.25 m thick along y = 6 with a doorway between the ends of its two
+        // parts; the robot follows the room's left wall (x = 0) upward, 1.6 m off it, and sees
+        // the doorway ahead on its right with a laser 0.1 m ahead of its centre, every 0.25°.
+        // About the robot's centre the far returns seen past the right-hand part's end fall
+        // between that end's returns and cut its corner off: the doorway looked 0.72 m wide.
+        let origin = DVec2::new(0.1, 0.0);
+        let pose = Pose::new(1.57, 3.48, 0.0, 88f64.to_radians());
+        // World +y (through the doorway) in the robot frame.
+        let through = DVec2::from_angle(-pose.yaw).rotate(DVec2::Y);
+        for door in [0.65, 0.8] {
+            let mut walls = vec![
+                (DVec2::new(0.0, 0.0), DVec2::new(0.0, 12.0)),
+                (DVec2::new(0.0, 12.0), DVec2::new(14.0, 12.0)),
+            ];
+            walls.extend(rect(DVec2::new(0.0, 5.875), DVec2::new(3.125, 6.125)));
+            walls.extend(rect(
+                DVec2::new(3.125 + door, 5.875),
+                DVec2::new(14.0, 6.125),
+            ));
+            let pts = scan_from(&local(&walls, &pose), origin, 0.25);
+            // Its width and direction, whatever the robot's turning circle.
+            let g = find_gap(&pts, origin, 1.0, 3.5, 2.0, 0.3, 2.5).expect("gap");
+            assert!((g.width - door).abs() < 0.03, "a {door} m doorway: {g:?}");
+            assert!(g.normal.dot(through) > 0.99, "a {door} m doorway: {g:?}");
+            // Too narrow for the robot to turn in, or wide enough.
+            let fits = find_gap(&pts, origin, 1.0, 3.5, 2.0, 0.71, 2.5).is_some();
+            assert_eq!(fits, door > 0.71, "a {door} m doorway");
+        }
+    }
+
+    /// Drives a passage through the first gap seen from `start` among `walls` (world frame,
+    /// boundary on the right), checking every step that no point of the walls (every
+    /// centimetre) lies inside the body. Returns the final pose.
+    fn drive_through(walls: &[(DVec2, DVec2)], start: Pose) -> Pose {
         let (length, width) = (0.508, 0.497);
-        let mut pose = Pose::default();
-        let pts = scan(&walls);
-        let g = find_gap(&pts, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
-        let mut pass = Passage::new(g.in_frame(&pose));
+        let mut pose = start;
+        let pts = scan(&local(walls, &pose));
+        let g = find_gap(&pts, DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
+        let mut pass = Passage::new(g.in_frame(&pose), 3.0, 0.4);
         let dt = 0.05;
         let mut steps = 0;
         loop {
-            // Returns in the robot frame from the current pose.
-            let r = DVec2::from_angle(-pose.yaw);
-            let local: Vec<(DVec2, DVec2)> = walls
-                .iter()
-                .map(|&(a, b)| (r.rotate(a - pose.xy()), r.rotate(b - pose.xy())))
-                .collect();
-            match pass.step(&pose, &scan(&local), length, width, dt) {
+            match pass.step(&pose, &scan(&local(walls, &pose)), length, width, dt) {
                 PassStep::Drive(v, w) => {
                     pose.yaw += w * dt;
                     pose.x += v * dt * pose.yaw.cos();
                     pose.y += v * dt * pose.yaw.sin();
                 }
-                PassStep::Done => break,
+                PassStep::Done => return pose,
                 PassStep::Blocked => panic!("blocked at {pose:?}"),
             }
-            // No point of the walls (every centimetre) inside the body.
             let r = DVec2::from_angle(-pose.yaw);
-            for (a, b) in &walls {
-                for i in 0..=((b - a).length() * 100.0) as usize {
+            for (a, b) in walls {
+                for i in 0..=((*b - *a).length() * 100.0) as usize {
                     let w = r.rotate(*a + (*b - *a).normalize() * (i as f64 / 100.0) - pose.xy());
                     assert!(
                         w.x.abs() > length / 2.0 || w.y.abs() > width / 2.0,
@@ -440,9 +606,42 @@ mod tests {
                 }
             }
             steps += 1;
-            assert!(steps < 2000, "no progress: {pose:?}");
+            assert!(steps < 4000, "no progress: {pose:?}");
         }
+    }
+
+    #[test]
+    fn a_passage_goes_through_a_doorway_without_touching_it() {
+        // The robot follows the wall on its right, 0.9 m off, 1 m before the doorway.
+        let pose = drive_through(&doorway(0.8), Pose::default());
         assert!(pose.y < -1.4, "{pose:?}");
         assert!((pose.x - 1.4).abs() < 0.1, "{pose:?}");
+    }
+
+    #[test]
+    fn a_passage_goes_on_between_sides_nearer_than_the_follow_circle_and_out() {
+        // The doorway is the mouth of a way 1 m wide and 1.5 m long (the wall is 1.5 m
+        // thick): the robot goes on through it, centred, and hands back beyond it.
+        let mut walls = vec![(DVec2::new(-5.0, -6.0), DVec2::new(8.0, -6.0))];
+        walls.extend(rect(DVec2::new(-5.0, -2.5), DVec2::new(1.0, -1.0)));
+        walls.extend(rect(DVec2::new(2.0, -2.5), DVec2::new(8.0, -1.0)));
+        let pose = drive_through(&walls, Pose::default());
+        assert!(pose.y < -2.5, "{pose:?}");
+        assert!((pose.x - 1.5).abs() < 0.1, "{pose:?}");
+    }
+
+    #[test]
+    fn a_passage_into_a_dead_end_turns_about_and_comes_back_out() {
+        // The way behind the doorway is closed 3 m in: the robot turns on the spot at its
+        // end and comes back out, facing the way it came from.
+        let mut walls = doorway(1.0);
+        walls.extend([
+            (DVec2::new(1.0, -1.0), DVec2::new(1.0, -4.0)),
+            (DVec2::new(1.0, -4.0), DVec2::new(2.0, -4.0)),
+            (DVec2::new(2.0, -4.0), DVec2::new(2.0, -1.0)),
+        ]);
+        let pose = drive_through(&walls, Pose::default());
+        assert!(pose.y > -1.0, "{pose:?}");
+        assert!(wrap_angle(pose.yaw - FRAC_PI_2).abs() < 0.3, "{pose:?}");
     }
 }

@@ -188,6 +188,7 @@ impl WallFollower {
             let turn_diameter = g.length.hypot(g.width);
             let seen = find_gap(
                 b.points(),
+                b.origin(),
                 side,
                 2.0 * radius + 0.5,
                 radius + 0.5,
@@ -205,7 +206,7 @@ impl WallFollower {
                         (seen.mid - mid).length() > 1.0 || g.travelled - at > TAU * radius + 2.0
                     });
                     if fresh {
-                        g.passage = Some(Passage::new(seen));
+                        g.passage = Some(Passage::new(seen, 2.0 * radius, self.speed));
                     }
                 }
                 _ => {}

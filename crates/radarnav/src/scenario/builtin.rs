@@ -52,6 +52,18 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/c-goal.toml"),
     ),
     (
+        "nav/crate-gap",
+        include_str!("../../../../scenarios/nav/crate-gap.toml"),
+    ),
+    (
+        "nav/diag-door",
+        include_str!("../../../../scenarios/nav/diag-door.toml"),
+    ),
+    (
+        "nav/door-narrow",
+        include_str!("../../../../scenarios/nav/door-narrow.toml"),
+    ),
+    (
         "nav/doorway",
         include_str!("../../../../scenarios/nav/doorway.toml"),
     ),
