@@ -204,6 +204,24 @@ struct Boundary {
 }
 
 impl Boundary {
+    /// Following starts at the hit point `hit`, `goal_dist` from the goal.
+    fn at_hit(hit: DVec2, goal_dist: f64) -> Self {
+        Self {
+            hit,
+            hit_goal_dist: goal_dist,
+            away: None,
+            closest: (hit, goal_dist, 0.0),
+            travelled: 0.0,
+            about_turn: 0.0,
+            leave_at: f64::INFINITY,
+            circled: false,
+            away_from_closest: false,
+            on_mline: true,
+            leave: false,
+            trail: Vec::new(),
+        }
+    }
+
     /// Whether the robot at `p` heading `yaw` has closed a loop: back within `tol` of the hit
     /// point after having been away, going the way it followed there before, or within `tol`
     /// of its own followed path, going the same way, at least `min_cycle` metres of following
@@ -425,20 +443,7 @@ impl Behaviour for BugController {
                         WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE)
                             .passing_gaps(vehicle.length, vehicle.width);
                     self.follower.engage();
-                    self.mode = Mode::Follow(Boundary {
-                        hit: p,
-                        hit_goal_dist: goal_dist,
-                        away: None,
-                        closest: (p, goal_dist, 0.0),
-                        travelled: 0.0,
-                        about_turn: 0.0,
-                        leave_at: f64::INFINITY,
-                        circled: false,
-                        away_from_closest: false,
-                        on_mline: true,
-                        leave: false,
-                        trail: Vec::new(),
-                    });
+                    self.mode = Mode::Follow(Boundary::at_hit(p, goal_dist));
                     return Decision::Drive(self.follower.command(&b, &pose, dt, radius));
                 }
                 let omega = (K_HEADING * heading).clamp(-TURN_RATE, TURN_RATE);
@@ -573,20 +578,7 @@ mod tests {
     use super::*;
 
     fn boundary(hit: DVec2) -> Boundary {
-        Boundary {
-            hit,
-            hit_goal_dist: 10.0,
-            away: None,
-            closest: (hit, 10.0, 0.0),
-            travelled: 0.0,
-            about_turn: 0.0,
-            leave_at: f64::INFINITY,
-            circled: false,
-            away_from_closest: false,
-            on_mline: true,
-            leave: false,
-            trail: Vec::new(),
-        }
+        Boundary::at_hit(hit, 10.0)
     }
 
     /// Follows `path` (points and headings) in steps of 5 cm as the controller does and

@@ -425,25 +425,7 @@ mod tests {
 
     /// Returns every 1° seen from the origin of the robot frame of walls given as segments.
     fn scan(walls: &[(DVec2, DVec2)]) -> Vec<DVec2> {
-        (0..360)
-            .filter_map(|i| {
-                let u = DVec2::from_angle((i as f64 - 180.0).to_radians());
-                walls
-                    .iter()
-                    .filter_map(|&(a, b)| {
-                        let d = b - a;
-                        let den = u.perp_dot(d);
-                        if den.abs() < 1e-12 {
-                            return None;
-                        }
-                        let t = a.perp_dot(d) / den;
-                        let s = a.perp_dot(u) / den;
-                        (t > 0.0 && (0.0..=1.0).contains(&s)).then_some(t)
-                    })
-                    .min_by(f64::total_cmp)
-                    .map(|t| u * t)
-            })
-            .collect()
+        scan_from(walls, DVec2::ZERO, 1.0)
     }
 
     /// A wall along x at y = −1 (on the right) with a doorway of `w` m from x = 1.
