@@ -229,6 +229,7 @@ pub struct Passage {
     gap: Gap,
     phase: Phase,
     time: f64,
+    /// Sides nearer together than this keep the robot in the passage, m.
     narrow: f64,
     /// Cruise speed between the sides, m/s.
     cruise: f64,
