@@ -64,24 +64,16 @@ pub fn nav_suite(a: &SuiteArgs<'_>, load: impl Fn(&str) -> Result<Scenario>) -> 
         .into_iter()
         .map(|s| TrialMap::new(s).map_err(anyhow::Error::from))
         .collect::<Result<Vec<_>>>()?;
-    let algorithms = a
-        .algorithms
-        .iter()
-        .map(|n| match n.as_str() {
-            "bug1" => Ok(BugAlgorithm::Bug1),
-            "bug2" => Ok(BugAlgorithm::Bug2),
-            _ => bail!("--algorithms: unknown `{n}`; known: bug1, bug2"),
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let sensors = a
-        .sensors
-        .iter()
-        .map(|n| match n.as_str() {
-            "radar" => Ok(SensorClass::Radar),
-            "laser" => Ok(SensorClass::Laser),
-            _ => bail!("--sensors: unknown `{n}`; known: radar, laser"),
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let algorithms = pick(
+        "--algorithms",
+        a.algorithms,
+        &[("bug1", BugAlgorithm::Bug1), ("bug2", BugAlgorithm::Bug2)],
+    )?;
+    let sensors = pick(
+        "--sensors",
+        a.sensors,
+        &[("radar", SensorClass::Radar), ("laser", SensorClass::Laser)],
+    )?;
     let poses = a
         .poses
         .iter()
@@ -163,4 +155,19 @@ pub fn nav_suite(a: &SuiteArgs<'_>, load: impl Fn(&str) -> Result<Scenario>) -> 
         )?;
     }
     Ok(())
+}
+
+/// The values `names` stand for among `known` (name, value) pairs; an unknown name is an
+/// error naming `flag` and the known names.
+fn pick<T: Copy>(flag: &str, names: &[String], known: &[(&str, T)]) -> Result<Vec<T>> {
+    names
+        .iter()
+        .map(|n| match known.iter().find(|(k, _)| k == n) {
+            Some(&(_, v)) => Ok(v),
+            None => {
+                let list: Vec<&str> = known.iter().map(|(k, _)| *k).collect();
+                bail!("{flag}: unknown `{n}`; known: {}", list.join(", "))
+            }
+        })
+        .collect()
 }
