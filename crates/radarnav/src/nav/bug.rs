@@ -36,7 +36,11 @@
 //! * a robot that has not got [`STILL_RADIUS`] from one place in [`STILL_TIME`] (turning on
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
 //!   a corner) has met a `no_path` condition too, and retries with a smaller standoff;
-//! * coming back past the hit point the other way (out of a dead end) closes no loop.
+//! * coming back past the hit point the other way (out of a dead end) closes no loop;
+//! * a turn on the spot with a return inside the body's circumscribed circle, or one that
+//!   bumped, backs off 0.15 m first where the way behind the body is free;
+//! * turning about or leaving waits while the follower is committed to a gap
+//!   ([`super::passage::Passage::committed`]).
 
 use glam::DVec2;
 use serde::Serialize;
@@ -69,6 +73,13 @@ const RETRY_FACTOR: f64 = 0.6;
 const TRAIL_STEP: f64 = 0.2;
 /// Two passes whose headings differ by less than this go the same way round, rad (60°).
 const SAME_WAY: f64 = 1.05;
+/// A turn on the spot that bumps backs the robot off this far first, m: a box-shaped body
+/// turning near a corner sweeps past its sides.
+const BACK_OFF: f64 = 0.15;
+/// Speed of that back-off, m/s.
+const BACK_SPEED: f64 = 0.1;
+/// Margin around the body's circumscribed circle that a turn on the spot wants free, m.
+const TURN_MARGIN: f64 = 0.03;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
 /// A robot that stays within this distance of one place ...
@@ -77,10 +88,16 @@ const STILL_RADIUS: f64 = 0.3;
 /// or bumping to and fro in a corner), s: a `no_path` condition.
 const STILL_TIME: f64 = 30.0;
 
-/// The safety distance a standoff retry tries after `safety`, or `None` at the floor (the
-/// robot's half-diagonal plus [`MIN_CLEARANCE`]).
+/// The smallest safety distance a standoff retry goes down to: the robot's half-diagonal
+/// plus [`MIN_CLEARANCE`], m.
+pub fn safety_floor(vehicle: &VehicleSpec) -> f64 {
+    0.5 * vehicle.length.hypot(vehicle.width) + MIN_CLEARANCE
+}
+
+/// The safety distance a standoff retry tries after `safety`, or `None` at the floor
+/// ([`safety_floor`]).
 pub fn retry_safety(safety: f64, vehicle: &VehicleSpec) -> Option<f64> {
-    let floor = 0.5 * vehicle.length.hypot(vehicle.width) + MIN_CLEARANCE;
+    let floor = safety_floor(vehicle);
     (safety > floor + 1e-9).then(|| (safety * RETRY_FACTOR).max(floor))
 }
 
@@ -276,6 +293,10 @@ pub struct BugController {
     last_leave: Option<(DVec2, f64)>,
     /// Where the robot last stood still and since when (s): the no-progress watchdog.
     still: Option<(DVec2, f64)>,
+    /// Whether the last command turned on the spot.
+    turned: bool,
+    /// Distance still to back off after a turn on the spot bumped, m.
+    backing: f64,
     report: BugReport,
 }
 
@@ -298,6 +319,8 @@ impl BugController {
             last: None,
             last_leave: None,
             still: None,
+            turned: false,
+            backing: 0.0,
             report,
         }
     }
@@ -363,6 +386,37 @@ impl Behaviour for BugController {
     }
 
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
+        let mut d = self.next_decision(input, bumped);
+        self.turned = matches!(d, Decision::Drive(c) if c.is_turn_on_the_spot());
+        // A turn on the spot sweeps the body's circumscribed circle: with a return inside
+        // it (a corner beside the body), back off first where the way behind is free.
+        if self.turned
+            && let Some(b) = self.bumpers.update(input)
+        {
+            let v = input.vehicle;
+            let sweep = 0.5 * v.length.hypot(v.width) + TURN_MARGIN;
+            if b.points().iter().any(|p| p.length() <= sweep) && behind_free(b, v, BACK_OFF) {
+                d = Decision::Drive(DriveCommand::twist(-BACK_SPEED, 0.0));
+                self.turned = false;
+            }
+        }
+        d
+    }
+}
+
+/// Whether the strip `distance` metres long behind the body's rear face, as wide as the
+/// body, is free of returns (a corner beside the body does not block backing off).
+fn behind_free(b: &super::Bumpers, v: &VehicleSpec, distance: f64) -> bool {
+    b.corridor_free_from(
+        std::f64::consts::PI,
+        v.length / 2.0,
+        v.length / 2.0 + distance,
+        v.width / 2.0,
+    )
+}
+
+impl BugController {
+    fn next_decision(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let pose = nav_pose(self.mission.pose, input);
         let p = pose.xy();
         self.start.get_or_insert(p);
@@ -395,6 +449,18 @@ impl Behaviour for BugController {
             return Decision::Drive(DriveCommand::STOP);
         };
         let half_width = vehicle.width / 2.0 + MIN_CLEARANCE;
+        // A turn on the spot bumped (a corner inside the body's turning circle): back off a
+        // little where the way behind is free, then decide again.
+        if bumped && self.turned {
+            self.backing = BACK_OFF;
+        }
+        if self.backing > 0.0 {
+            self.backing -= step;
+            if self.backing > 0.0 && behind_free(&b, vehicle, self.backing + BACK_OFF) {
+                return Decision::Drive(DriveCommand::twist(-BACK_SPEED, 0.0));
+            }
+            self.backing = 0.0;
+        }
         // A goal inside the standoff of an obstacle beyond it: the bumpers trip before the
         // goal is reached, but the body's corridor to the goal (and a margin past it) is free.
         let final_approach = goal_dist <= reach + vehicle.length

@@ -253,10 +253,15 @@ impl Bumpers {
     /// centre along the robot-frame direction `angle`, up to `length` metres: the way is open
     /// for the robot's body, whatever the sectors say.
     pub fn corridor_free(&self, angle: f64, length: f64, half_width: f64) -> bool {
+        self.corridor_free_from(angle, 0.0, length, half_width)
+    }
+
+    /// [`Bumpers::corridor_free`] for the part of the corridor from `start` metres on.
+    pub fn corridor_free_from(&self, angle: f64, start: f64, length: f64, half_width: f64) -> bool {
         let u = DVec2::from_angle(angle);
         !self.points.iter().any(|p| {
             let along = p.dot(u);
-            (0.0..=length).contains(&along) && u.perp_dot(*p).abs() <= half_width
+            (start..=length).contains(&along) && u.perp_dot(*p).abs() <= half_width
         })
     }
 

@@ -235,6 +235,12 @@ pub struct Passage {
     cruise: f64,
     /// Turn left still to make on the spot at a dead end, rad.
     about: f64,
+    /// Whether, at the last step, the robot was well into a corridor beyond the gap (at
+    /// least `narrow` metres) with room to turn on the spot.
+    free_to_turn: bool,
+    /// Distance driven since the gap was passed (believed), m, and where the last step was.
+    through: f64,
+    last: Option<DVec2>,
 }
 
 /// What a passage step asks for.
@@ -261,7 +267,20 @@ impl Passage {
             narrow,
             cruise,
             about: 0.0,
+            free_to_turn: false,
+            through: 0.0,
+            last: None,
         }
+    }
+
+    /// Whether the robot is committed to the passage: turning on the spot or leaving the
+    /// boundary now could touch the gap's sides, or would decide between two obstacles
+    /// what belongs to the boundary beyond them. Until the gap is passed and the robot is
+    /// `narrow` metres into the corridor behind it (a long corridor must not hold off a
+    /// Bug's decisions for ever), while that corridor is too narrow to turn in, and while a
+    /// dead-end turn is under way.
+    pub fn committed(&self) -> bool {
+        !self.free_to_turn || self.about > 0.0
     }
 
     /// The world-frame gap being passed.
@@ -297,11 +316,15 @@ impl Passage {
         dt: f64,
     ) -> PassStep {
         self.time += dt;
+        let p = pose.xy();
+        if self.phase == Phase::Through {
+            self.through += self.last.map_or(0.0, |l| (p - l).length());
+        }
+        self.last = Some(p);
         if self.time > PASS_TIMEOUT && self.phase != Phase::Through {
             return PassStep::Blocked;
         }
         let g = &self.gap;
-        let p = pose.xy();
         let t = (p - g.mid).dot(g.normal);
         let e = (p - g.mid).dot(g.normal.perp());
         let heading_to = |target: DVec2| wrap_angle((target - p).to_angle() - pose.yaw);
@@ -392,6 +415,8 @@ impl Passage {
             clear(&|q| q.x >= -half.0 - 0.1 && q.x <= half.0 + BODY_MARGIN && q.y.abs() <= half.1);
         let turn_radius = 0.5 * length.hypot(width) + BODY_MARGIN;
         let turn_clear = clear(&|q| q.length() <= turn_radius);
+        self.free_to_turn =
+            self.phase == Phase::Through && self.through >= self.narrow && turn_clear;
         // A dead end between the sides: turn about on the spot and go back out between
         // them, which is how the boundary goes on (round the end, along the other side).
         if self.phase == Phase::Through && (self.about > 0.0 || v > 0.0 && !ahead_clear) {
@@ -561,6 +586,15 @@ mod tests {
     /// boundary on the right), checking every step that no point of the walls (every
     /// centimetre) lies inside the body. Returns the final pose.
     fn drive_through(walls: &[(DVec2, DVec2)], start: Pose) -> Pose {
+        drive_through_watching(walls, start, |_, _| {})
+    }
+
+    /// [`drive_through`], calling `watch` with the passage and the pose after every step.
+    fn drive_through_watching(
+        walls: &[(DVec2, DVec2)],
+        start: Pose,
+        mut watch: impl FnMut(&Passage, &Pose),
+    ) -> Pose {
         let (length, width) = (0.508, 0.497);
         let mut pose = start;
         let pts = scan(&local(walls, &pose));
@@ -578,6 +612,7 @@ mod tests {
                 PassStep::Done => return pose,
                 PassStep::Blocked => panic!("blocked at {pose:?}"),
             }
+            watch(&pass, &pose);
             let r = DVec2::from_angle(-pose.yaw);
             for (a, b) in walls {
                 for i in 0..=((*b - *a).length() * 100.0) as usize {
@@ -611,6 +646,35 @@ mod tests {
         let pose = drive_through(&walls, Pose::default());
         assert!(pose.y < -2.5, "{pose:?}");
         assert!((pose.x - 1.5).abs() < 0.1, "{pose:?}");
+    }
+
+    #[test]
+    fn a_passage_commits_through_a_short_way_and_frees_the_robot_well_into_a_long_corridor() {
+        // The 1.5 m way of the test above: committed all the way through.
+        let mut walls = vec![(DVec2::new(-5.0, -6.0), DVec2::new(8.0, -6.0))];
+        walls.extend(rect(DVec2::new(-5.0, -2.5), DVec2::new(1.0, -1.0)));
+        walls.extend(rect(DVec2::new(2.0, -2.5), DVec2::new(8.0, -1.0)));
+        drive_through_watching(&walls, Pose::default(), |pass, pose| {
+            assert!(pass.committed(), "free in a short way at {pose:?}");
+        });
+        // A 1.2 m doorway into a corridor as wide and 8 m long, closed at its end: free to
+        // turn only once `narrow` (3 m) into it, and committed again for the dead-end turn.
+        let mut walls = doorway(1.2);
+        walls.extend([
+            (DVec2::new(1.0, -1.0), DVec2::new(1.0, -9.0)),
+            (DVec2::new(1.0, -9.0), DVec2::new(2.2, -9.0)),
+            (DVec2::new(2.2, -9.0), DVec2::new(2.2, -1.0)),
+        ]);
+        let (mut freed_at, mut turned_committed) = (None, false);
+        drive_through_watching(&walls, Pose::default(), |pass, pose| {
+            if !pass.committed() {
+                freed_at.get_or_insert(pose.y);
+            }
+            turned_committed |= pass.about > 0.0 && pass.committed();
+        });
+        let y = freed_at.expect("freed in the corridor");
+        assert!((-6.5..=-4.0).contains(&y), "freed at y = {y}");
+        assert!(turned_committed);
     }
 
     #[test]

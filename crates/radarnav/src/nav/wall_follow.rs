@@ -152,10 +152,13 @@ impl WallFollower {
         self.rule
     }
 
-    /// Whether a gap is being passed: turning on the spot or leaving the boundary now could
-    /// touch its sides.
+    /// Whether a gap is being passed and turning on the spot or leaving the boundary now
+    /// could touch its sides ([`Passage::committed`]): not once through it, in a passage
+    /// with room to turn.
     pub fn passing(&self) -> bool {
-        self.gaps.as_ref().is_some_and(|g| g.passage.is_some())
+        self.gaps
+            .as_ref()
+            .is_some_and(|g| g.passage.as_ref().is_some_and(Passage::committed))
     }
 
     /// Starts following a wall already met (Bug's hit point), skipping the search.

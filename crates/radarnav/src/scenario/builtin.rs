@@ -84,6 +84,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/hedge-thin.toml"),
     ),
     (
+        "nav/l-corridor",
+        include_str!("../../../../scenarios/nav/l-corridor.toml"),
+    ),
+    (
         "nav/long-wall",
         include_str!("../../../../scenarios/nav/long-wall.toml"),
     ),

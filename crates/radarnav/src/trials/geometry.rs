@@ -6,7 +6,8 @@
 //! * **Bounds** (Choset et al. 2005, ch. 2; Lumelsky & Stepanov 1987), with every obstacle
 //!   grown by the standoff the robot follows boundaries at:
 //!   Bug1 ≤ d + 1.5 Σ pᵢ over the grown obstacles within d of the goal; Bug2 ≤ d + ½ Σ nᵢ pᵢ
-//!   with nᵢ the number of times the m-line crosses the boundary of grown obstacle i.
+//!   with nᵢ the number of times the m-line crosses the boundary of grown obstacle i, made
+//!   even (a goal inside an obstacle is known unreachable only after going once round it).
 //!   Obstacles closer than twice the standoff merge when grown: the robot follows them as one.
 //!   A perimeter counts only the boundary that faces space the robot can reach (the outside
 //!   of a hall's walls is nobody's path).
@@ -217,12 +218,15 @@ impl Field {
             }
             prev = here;
         }
+        // A line that ends inside a grown obstacle (a goal in a pen) crosses its boundary an
+        // odd number of times, yet the robot goes once round it to tell it cannot get in:
+        // count a crossing more, as if the line left it again.
         let bug2 = straight
             + 0.5
                 * perimeters
                     .iter()
                     .zip(&crossings)
-                    .map(|(p, &c)| p * c as f64)
+                    .map(|(p, &c)| p * c.next_multiple_of(2) as f64)
                     .sum::<f64>();
         Expectation {
             reachable,
@@ -466,6 +470,15 @@ mod tests {
         assert!(p >= want && p < 1.05 * want, "perimeter {p} vs {want}");
         // The m-line enters and leaves the grown box once: n = 2.
         assert!((e.bug2_bound - (10.0 + p)).abs() < 1e-9, "{e:?}");
+        // A goal inside the box: the line only enters it, yet going once round it is what
+        // tells the goal is out of reach, so it counts as n = 2 as well.
+        let e = expect(
+            &w,
+            &geometry(DVec2::ZERO, DVec2::new(5.0, 0.0)),
+            SensorClass::Laser,
+        );
+        assert!(!e.reachable);
+        assert!((e.bug2_bound - (5.0 + p)).abs() < 1e-9, "{e:?}");
     }
 
     #[test]

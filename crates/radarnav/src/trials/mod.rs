@@ -9,7 +9,10 @@
 //! * its outcome is the one the geometry implies ([`geometry::expect`]): `reached` when the
 //!   robot's disc fits from start to goal, else `no_path` (no timeout);
 //! * it never bumped;
-//! * its true path length keeps the classic bound of its algorithm.
+//! * its true path length keeps the classic bound of its algorithm, summed over its standoff
+//!   retries, each taken at its own standoff and at the standoff floor (the larger counts: a
+//!   way narrower than twice the standoff is closed by the grown obstacles, yet the follower
+//!   drives its middle).
 //!
 //! Runs last as long as the scenario says, or longer when the bounds need it: twice the first
 //! attempt's bound at cruise speed for it and for each standoff retry the bumpers allow, plus
@@ -24,7 +27,7 @@ use thiserror::Error;
 use crate::Scenario;
 use crate::map::PoseSource;
 use crate::mission::{Mission, MissionError, MissionKind};
-use crate::nav::bug::retry_safety;
+use crate::nav::bug::{retry_safety, safety_floor};
 use crate::nav::{BugAlgorithm, BugMission, BumperSensor, read_first_echoes};
 use crate::record::PathTrace;
 use crate::render::RenderError;
@@ -231,7 +234,27 @@ impl TrialMap {
             BugAlgorithm::Bug1 => e.bug1_bound,
             BugAlgorithm::Bug2 => e.bug2_bound,
         };
-        let first_bound = pick(e);
+        let g = &self.geometries[trial.sensor as usize];
+        let field = &self.fields[trial.sensor as usize];
+        // The follower drives the middle of a way narrower than twice its standoff, where the
+        // obstacles grown by the standoff close it: an attempt's boundaries are also measured
+        // at the standoff floor, where such ways are open, and its bound is the larger one.
+        let floor = safety_floor(self.robot.vehicle) + self.bug.bumpers.band / 2.0;
+        let attempt_bound = |start: glam::DVec2, standoff: f64| {
+            let at = |standoff: f64| {
+                pick(&field.expect(&TrialGeometry {
+                    start,
+                    standoff,
+                    ..*g
+                }))
+            };
+            if standoff > floor {
+                at(standoff).max(at(floor))
+            } else {
+                at(standoff)
+            }
+        };
+        let first_bound = attempt_bound(g.start, g.standoff);
         let mut robot = self.robot.clone();
         robot.sensors = vec![self.sensors[trial.sensor as usize].clone()];
         let mut bug = self.bug.clone();
@@ -273,7 +296,6 @@ impl TrialMap {
         // A standoff retry starts a new Bug run where it is, nearer its boundaries: the bound
         // of the whole run is the sum of each attempt's classic bound at its own standoff.
         let mut bound = first_bound;
-        let g = &self.geometries[trial.sensor as usize];
         let retries = summary
             .navigation
             .as_ref()
@@ -287,12 +309,7 @@ impl TrialMap {
             ) else {
                 continue;
             };
-            let attempt = TrialGeometry {
-                start: glam::DVec2::new(x, y),
-                standoff: safety + bug.bumpers.band / 2.0,
-                ..*g
-            };
-            bound += pick(&self.fields[trial.sensor as usize].expect(&attempt));
+            bound += attempt_bound(glam::DVec2::new(x, y), safety + bug.bumpers.band / 2.0);
         }
         let expected = if e.reachable {
             RunOutcome::Reached

@@ -92,6 +92,14 @@ impl DriveCommand {
         Self::Twist(Twist { v, omega })
     }
 
+    /// Whether it turns on the spot: a turn rate without forward speed.
+    pub fn is_turn_on_the_spot(&self) -> bool {
+        match *self {
+            Self::Twist(Twist { v, omega }) => v.abs() < 1e-9 && omega != 0.0,
+            Self::Tracks { left, right } => (left + right).abs() < 1e-9 && left != 0.0,
+        }
+    }
+
     /// USARSim's `DRIVE {Left l} {Right r}` for a skid-steered robot: wheel spin speeds in rad/s.
     pub fn usarsim_drive(left: f64, right: f64, spec: &VehicleSpec) -> Self {
         Self::Tracks {
