@@ -46,6 +46,7 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
+use super::passage::turn_clear;
 use super::wall_follow::{Side, WallFollower};
 use super::{Behaviour, nav_pose};
 use crate::map::PoseSource;
@@ -73,13 +74,12 @@ const RETRY_FACTOR: f64 = 0.6;
 const TRAIL_STEP: f64 = 0.2;
 /// Two passes whose headings differ by less than this go the same way round, rad (60°).
 const SAME_WAY: f64 = 1.05;
-/// A turn on the spot that bumps backs the robot off this far first, m: a box-shaped body
-/// turning near a corner sweeps past its sides.
+/// A turn on the spot with a return inside the circle the body sweeps, or one that bumped,
+/// backs the robot off this far first, m (a box-shaped body turning near a corner sweeps
+/// past its sides); twice this at most before turning anyway.
 const BACK_OFF: f64 = 0.15;
 /// Speed of that back-off, m/s.
 const BACK_SPEED: f64 = 0.1;
-/// Margin around the body's circumscribed circle that a turn on the spot wants free, m.
-const TURN_MARGIN: f64 = 0.03;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
 /// A robot that stays within this distance of one place ...
@@ -297,6 +297,8 @@ pub struct BugController {
     turned: bool,
     /// Distance still to back off after a turn on the spot bumped, m.
     backing: f64,
+    /// Distance backed off before the turn now wanted (believed), m, and where from.
+    backed: (f64, Option<DVec2>),
     report: BugReport,
 }
 
@@ -321,6 +323,7 @@ impl BugController {
             still: None,
             turned: false,
             backing: 0.0,
+            backed: (0.0, None),
             report,
         }
     }
@@ -388,14 +391,23 @@ impl Behaviour for BugController {
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let mut d = self.next_decision(input, bumped);
         self.turned = matches!(d, Decision::Drive(c) if c.is_turn_on_the_spot());
-        // A turn on the spot sweeps the body's circumscribed circle: with a return inside
-        // it (a corner beside the body), back off first where the way behind is free.
+        let p = nav_pose(self.mission.pose, input).xy();
+        if !self.turned {
+            self.backed = (0.0, None);
+        }
+        // A turn on the spot sweeps the body's circumscribed circle: with a corner inside it,
+        // back off first (a little, where the way behind is free), then turn.
         if self.turned
             && let Some(b) = self.bumpers.update(input)
         {
             let v = input.vehicle;
-            let sweep = 0.5 * v.length.hypot(v.width) + TURN_MARGIN;
-            if b.points().iter().any(|p| p.length() <= sweep) && behind_free(b, v, BACK_OFF) {
+            let (backed, from) = &mut self.backed;
+            *backed += from.map_or(0.0, |f| (p - f).length());
+            *from = Some(p);
+            if !turn_clear(b.points(), v.length, v.width)
+                && *backed < 2.0 * BACK_OFF
+                && behind_free(b, v, BACK_OFF)
+            {
                 d = Decision::Drive(DriveCommand::twist(-BACK_SPEED, 0.0));
                 self.turned = false;
             }

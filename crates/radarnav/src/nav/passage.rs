@@ -58,6 +58,14 @@ const REFINE_COS: f64 = 0.985;
 const BACK_SPEED: f64 = 0.1;
 /// Returns inside the body's swept zone that block a move (one may be range noise).
 const HITS_TO_BLOCK: usize = 3;
+
+/// Whether a body of `length` × `width` m can turn on the spot among the robot-frame returns
+/// `points`: fewer than [`HITS_TO_BLOCK`] lie in the circle it sweeps (its half-diagonal
+/// plus [`BODY_MARGIN`]).
+pub fn turn_clear(points: &[DVec2], length: f64, width: f64) -> bool {
+    let radius = 0.5 * length.hypot(width) + BODY_MARGIN;
+    points.iter().filter(|q| q.length() <= radius).count() < HITS_TO_BLOCK
+}
 /// Points across a gap checked for being seen open (the pair's ends excluded).
 const GAP_SAMPLES: usize = 6;
 /// A return within this angle of a point hides it, rad (1°, a radar's ray spacing).
@@ -413,8 +421,7 @@ impl Passage {
             clear(&|q| q.x <= half.0 + 0.15 && q.x >= -half.0 - BODY_MARGIN && q.y.abs() <= half.1);
         let behind_clear =
             clear(&|q| q.x >= -half.0 - 0.1 && q.x <= half.0 + BODY_MARGIN && q.y.abs() <= half.1);
-        let turn_radius = 0.5 * length.hypot(width) + BODY_MARGIN;
-        let turn_clear = clear(&|q| q.length() <= turn_radius);
+        let turn_clear = turn_clear(points, length, width);
         self.free_to_turn =
             self.phase == Phase::Through && self.through >= self.narrow && turn_clear;
         // A dead end between the sides: turn about on the spot and go back out between
