@@ -46,7 +46,7 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
-use super::passage::turn_clear;
+use super::passage::{BACK_SPEED, turn_clear};
 use super::wall_follow::{Side, WallFollower};
 use super::{Behaviour, nav_pose};
 use crate::map::PoseSource;
@@ -78,8 +78,6 @@ const SAME_WAY: f64 = 1.05;
 /// backs the robot off this far first, m (a box-shaped body turning near a corner sweeps
 /// past its sides); twice this at most before turning anyway.
 const BACK_OFF: f64 = 0.15;
-/// Speed of that back-off, m/s.
-const BACK_SPEED: f64 = 0.1;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
 /// A robot that stays within this distance of one place ...

@@ -54,8 +54,9 @@ const LOOK_AHEAD: f64 = 0.5;
 const PASS_TIMEOUT: f64 = 60.0;
 /// A sighting whose normal is within this cosine of the held one is the same gap (10°).
 const REFINE_COS: f64 = 0.985;
-/// Speed backing out of a gap when neither driving on nor turning is clear, m/s.
-const BACK_SPEED: f64 = 0.1;
+/// Speed backing out of a gap when neither driving on nor turning is clear, and backing off
+/// before a Bug's turn on the spot, m/s.
+pub const BACK_SPEED: f64 = 0.1;
 /// Returns inside the body's swept zone that block a move (one may be range noise).
 const HITS_TO_BLOCK: usize = 3;
 
@@ -66,6 +67,7 @@ pub fn turn_clear(points: &[DVec2], length: f64, width: f64) -> bool {
     let radius = 0.5 * length.hypot(width) + BODY_MARGIN;
     points.iter().filter(|q| q.length() <= radius).count() < HITS_TO_BLOCK
 }
+
 /// Points across a gap checked for being seen open (the pair's ends excluded).
 const GAP_SAMPLES: usize = 6;
 /// A return within this angle of a point hides it, rad (1°, a radar's ray spacing).
@@ -643,14 +645,19 @@ mod tests {
         assert!((pose.x - 1.4).abs() < 0.1, "{pose:?}");
     }
 
+    /// A doorway 1 m wide in a wall 1.5 m thick (a short way through), a room wall beyond.
+    fn short_way() -> Vec<(DVec2, DVec2)> {
+        let mut walls = vec![(DVec2::new(-5.0, -6.0), DVec2::new(8.0, -6.0))];
+        walls.extend(rect(DVec2::new(-5.0, -2.5), DVec2::new(1.0, -1.0)));
+        walls.extend(rect(DVec2::new(2.0, -2.5), DVec2::new(8.0, -1.0)));
+        walls
+    }
+
     #[test]
     fn a_passage_goes_on_between_sides_nearer_than_the_follow_circle_and_out() {
         // The doorway is the mouth of a way 1 m wide and 1.5 m long (the wall is 1.5 m
         // thick): the robot goes on through it, centred, and hands back beyond it.
-        let mut walls = vec![(DVec2::new(-5.0, -6.0), DVec2::new(8.0, -6.0))];
-        walls.extend(rect(DVec2::new(-5.0, -2.5), DVec2::new(1.0, -1.0)));
-        walls.extend(rect(DVec2::new(2.0, -2.5), DVec2::new(8.0, -1.0)));
-        let pose = drive_through(&walls, Pose::default());
+        let pose = drive_through(&short_way(), Pose::default());
         assert!(pose.y < -2.5, "{pose:?}");
         assert!((pose.x - 1.5).abs() < 0.1, "{pose:?}");
     }
@@ -658,10 +665,7 @@ mod tests {
     #[test]
     fn a_passage_commits_through_a_short_way_and_frees_the_robot_well_into_a_long_corridor() {
         // The 1.5 m way of the test above: committed all the way through.
-        let mut walls = vec![(DVec2::new(-5.0, -6.0), DVec2::new(8.0, -6.0))];
-        walls.extend(rect(DVec2::new(-5.0, -2.5), DVec2::new(1.0, -1.0)));
-        walls.extend(rect(DVec2::new(2.0, -2.5), DVec2::new(8.0, -1.0)));
-        drive_through_watching(&walls, Pose::default(), |pass, pose| {
+        drive_through_watching(&short_way(), Pose::default(), |pass, pose| {
             assert!(pass.committed(), "free in a short way at {pose:?}");
         });
         // A 1.2 m doorway into a corridor as wide and 8 m long, closed at its end: free to
