@@ -47,16 +47,15 @@ pub fn forest_spec(count: usize, side: Option<f64>, radius: &str) -> Result<Fore
     let [lo, hi] = parsed[..] else {
         bail!("--radius `{radius}`: expected MIN,MAX in metres");
     };
-    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
-        bail!("--radius `{radius}`: expected 0 < MIN < MAX");
+    let size = &radarnav::limits::FOREST_SIZE;
+    if !(size.contains(lo) && size.contains(hi) && lo < hi) {
+        bail!(
+            "--radius `{radius}`: expected MIN < MAX, each from {}",
+            size.range()
+        );
     }
+    // --forest and --side are range-checked by the argument parser.
     let side = side.unwrap_or(3.0 * (count as f64).sqrt());
-    if !(side > 0.0 && side <= 1e5) {
-        bail!("--side {side}: expected 0 < side <= 100000 m");
-    }
-    if count == 0 || count > 10_000_000 {
-        bail!("--forest {count}: expected 1 to 10000000 spheres");
-    }
     Ok(ForestSpec {
         count,
         side,

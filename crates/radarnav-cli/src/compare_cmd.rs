@@ -8,11 +8,12 @@ use std::io::{IsTerminal, Write};
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
 use radarnav::Scenario;
 use radarnav::compare::{ExploreJob, ExploreResult, coverage_at, explore, robot_with_sensor};
+use radarnav::limits::budget::Budget;
 use radarnav::map::{MapConfig, Truth};
 use radarnav::nav::{BumperConfig, Strategy};
 use radarnav::render::{pixmap_from_rgb, save_png};
@@ -36,14 +37,7 @@ pub struct CompareArgs<'a> {
 /// `radarnav compare`.
 pub fn compare(a: &CompareArgs<'_>) -> Result<()> {
     let s = a.scenario;
-    if a.seeds == 0 {
-        bail!("--seeds must be at least 1");
-    }
-    if let Some(d) = a.duration
-        && !(d > 0.0 && d.is_finite())
-    {
-        bail!("--duration must be a number of seconds > 0, found {d}");
-    }
+    // --seeds, --duration and --safety are range-checked by the argument parser.
     let strategies = a
         .strategies
         .iter()
@@ -66,6 +60,9 @@ pub fn compare(a: &CompareArgs<'_>) -> Result<()> {
     for sensor in a.sensors {
         let r = robot_with_sensor(s, mission_robot, sensor).with_context(|| "--sensors")?;
         let z = r.sensors[0].mount.z;
+        // The truth raster covers the world's bounds: refuse a world too large for it.
+        let bounds = radarnav::render::world_region(&s.world);
+        Budget::default().check_maps(["truth"], bounds, MapConfig::default().resolution)?;
         truths.insert(
             sensor.clone(),
             Arc::new(Truth::of_world(
@@ -164,7 +161,7 @@ fn write_samples(dir: &Path, results: &[ExploreResult]) -> Result<std::path::Pat
         }
     }
     let path = dir.join("compare.csv");
-    fs::write(&path, csv).with_context(|| format!("writing {}", path.display()))?;
+    radarnav::record::write_whole(&path, csv.as_bytes())?;
     Ok(path)
 }
 
@@ -191,7 +188,7 @@ fn write_runs(dir: &Path, results: &[ExploreResult]) -> Result<std::path::PathBu
         )?;
     }
     let path = dir.join("compare_runs.csv");
-    fs::write(&path, csv).with_context(|| format!("writing {}", path.display()))?;
+    radarnav::record::write_whole(&path, csv.as_bytes())?;
     Ok(path)
 }
 

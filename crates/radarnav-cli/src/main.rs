@@ -15,6 +15,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use radarnav::demo::{result_figure, share_past_foliage, thesis_experiment};
+use radarnav::limits::{self, Limit};
 use radarnav::render::{Figure, save_png};
 use radarnav::scenario::{BUILTIN_SCENARIOS, NAV_SUITE};
 use radarnav::sensor::{PRESETS, Tracer};
@@ -45,13 +46,15 @@ enum Command {
         #[arg(long)]
         seed: Option<u64>,
         /// Extra scans per sensor for the mean share.
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, default_value_t = 100, value_parser = count::<usize>(&limits::REPEATS))]
         repeats: usize,
     },
     /// List the built-in scenarios.
     Scenarios,
     /// List the sensor presets.
     Presets,
+    /// Print the valid range of every numeric input (docs/limits.md) as a Markdown table.
+    Limits,
     /// Draw a scenario's world, with its robots at their start poses.
     Render {
         /// A built-in name or a path to a .toml file.
@@ -60,7 +63,7 @@ enum Command {
         #[arg(long, default_value = "out")]
         out: PathBuf,
         /// Longer side of the map area, pixels.
-        #[arg(long, default_value_t = 900)]
+        #[arg(long, default_value_t = 900, value_parser = count::<u32>(&limits::PIXELS))]
         pixels: u32,
     },
     /// One scan: writes scan.png, scan.json and scan.csv; echoes.csv in `all` mode; for an
@@ -85,7 +88,7 @@ enum Command {
         #[arg(long, default_value = "out")]
         out: PathBuf,
         /// Longer side of the map area, pixels.
-        #[arg(long, default_value_t = 900)]
+        #[arg(long, default_value_t = 900, value_parser = count::<u32>(&limits::PIXELS))]
         pixels: u32,
     },
     /// Drive a scenario's mission and record it: trajectory.csv, scans/*.rnscan,
@@ -107,13 +110,13 @@ enum Command {
         #[arg(long)]
         seed: Option<u64>,
         /// Longest simulated time, seconds (default: the scenario's).
-        #[arg(long)]
+        #[arg(long, value_parser = number(&limits::DURATION))]
         duration: Option<f64>,
         /// Do not write run.mcap.
         #[arg(long)]
         no_mcap: bool,
         /// Longer side of the map area of path.png and the map figures, pixels.
-        #[arg(long, default_value_t = 900)]
+        #[arg(long, default_value_t = 900, value_parser = count::<u32>(&limits::PIXELS))]
         pixels: u32,
         /// Maps to build, comma-separated; each a sensor name or sensors joined by `+`
         /// (`radar,laser,radar+laser`). Default: one map per sensor of the robot.
@@ -126,16 +129,24 @@ enum Command {
         #[arg(long, default_value = "truth")]
         map_pose: String,
         /// Map cell size, metres.
-        #[arg(long, default_value_t = 0.05)]
+        #[arg(long, default_value_t = 0.05, value_parser = number(&limits::MAP_RESOLUTION))]
         map_resolution: f64,
         /// A ray with no return frees map cells up to this range, metres.
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long, default_value_t = 10.0, value_parser = number(&limits::MAP_FREE_RANGE))]
         map_max_free_range: f64,
         /// Sensor presets to add to the robot, comma-separated, each named after its preset
         /// and mounted like the robot's first sensor (e.g. `navtech_cts350x`: its power
         /// images go to radar/<sensor>/).
         #[arg(long, value_delimiter = ',')]
         add_sensor: Vec<String>,
+        /// Memory the run may plan for, GB (default 4): maps over it are refused before
+        /// the run starts.
+        #[arg(long, value_parser = number(&limits::MAX_MEMORY))]
+        max_memory: Option<f64>,
+        /// Bytes the run may write, GB (default 10): a run whose outputs are estimated
+        /// larger is refused before it starts.
+        #[arg(long, value_parser = number(&limits::MAX_OUTPUT))]
+        max_output: Option<f64>,
     },
     /// Compare exploration strategies with each sensor over several seeds (in parallel):
     /// writes compare.csv (coverage against distance), compare_runs.csv and compare.png.
@@ -153,16 +164,16 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "radar,laser")]
         sensors: Vec<String>,
         /// Runs per strategy and sensor, seeds SEED, SEED+1, ...
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = count::<u64>(&limits::SEEDS))]
         seeds: u64,
         /// First seed (default: the scenario's).
         #[arg(long)]
         seed: Option<u64>,
         /// Longest simulated time of a run, seconds (default: the scenario's).
-        #[arg(long)]
+        #[arg(long, value_parser = number(&limits::DURATION))]
         duration: Option<f64>,
         /// Bumper safety distance, metres (default: 2.5 vehicle lengths).
-        #[arg(long)]
+        #[arg(long, value_parser = number(&limits::BUMPER))]
         safety: Option<f64>,
         /// Output directory.
         #[arg(long, default_value = "out")]
@@ -177,7 +188,7 @@ enum Command {
         /// built-in trial maps, `radarnav scenarios` lists them as nav/...).
         scenarios: Vec<String>,
         /// Seeds 1..=N per configuration.
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, default_value_t = 3, value_parser = count::<u64>(&limits::SEEDS))]
         seeds: u64,
         /// Algorithms, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "bug1,bug2")]
@@ -200,43 +211,56 @@ enum Command {
         #[arg(default_value = "foliage-wall")]
         scenario: String,
         /// Scans per sensor.
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, value_parser = count::<usize>(&limits::SCANS))]
         scans: usize,
         /// Replace the scenario's objects by a generated forest of this many foliage spheres,
         /// the robot at its centre.
-        #[arg(long)]
+        #[arg(long, value_parser = count::<usize>(&limits::FOREST))]
         forest: Option<usize>,
         /// Side of the forest's square, metres (default 3 m x sqrt(N): one sphere per 9 m2).
-        #[arg(long)]
+        #[arg(long, value_parser = number(&limits::FOREST_SIZE))]
         side: Option<f64>,
         /// Radii of the forest's spheres, `MIN,MAX` metres.
         #[arg(long, default_value = "0.3,1.5")]
         radius: String,
         /// Simulate this many seconds of the scenario's mission (waypoints repeat) without
         /// recording, and print simulated time per wall time.
-        #[arg(long)]
+        #[arg(long, value_parser = number(&limits::BENCH_SIM))]
         sim: Option<f64>,
         /// Write the world (the forest with --forest) and level rays from random free poses
         /// to this directory: world.json, rays.csv, meta.json.
         #[arg(long)]
         export: Option<PathBuf>,
         /// Poses of the exported rays; each casts 360 level rays, 0.4 m above the ground.
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, value_parser = count::<usize>(&limits::POSES))]
         poses: usize,
         /// Ray length of the exported scene, metres.
-        #[arg(long, default_value_t = 80.0)]
+        #[arg(long, default_value_t = 80.0, value_parser = number(&limits::FOREST_SIZE))]
         range: f64,
         /// Trace the rays of an exported scene (laser: first hit; radar: 3 dB budget), write
         /// their ranges beside it and print rays per CPU-second, medians of --repeats runs.
         #[arg(long, conflicts_with_all = ["export", "sim"])]
         rays: Option<PathBuf>,
         /// Runs of --rays.
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = count::<usize>(&limits::REPEATS))]
         repeats: usize,
         /// Print the result of --rays as one line of JSON.
         #[arg(long)]
         json: bool,
     },
+}
+
+/// A clap parser of a number in `limit`'s range.
+fn number(limit: &'static Limit) -> impl Fn(&str) -> Result<f64, String> + Clone {
+    move |s| limit.parse(s)
+}
+
+/// A clap parser of a whole number in `limit`'s range.
+fn count<T: TryFrom<u64>>(limit: &'static Limit) -> impl Fn(&str) -> Result<T, String> + Clone {
+    move |s| {
+        let v = limit.parse_count(s)?;
+        T::try_from(v).map_err(|_| format!("{v} is too large"))
+    }
 }
 
 /// `println!` that returns an error instead of panicking when stdout is closed.
@@ -273,6 +297,10 @@ fn run(cli: Cli) -> Result<()> {
                     s.description
                 );
             }
+            Ok(())
+        }
+        Command::Limits => {
+            say!("{}", limits::markdown_table().trim_end());
             Ok(())
         }
         Command::Presets => {
@@ -332,13 +360,16 @@ fn run(cli: Cli) -> Result<()> {
             map_resolution,
             map_max_free_range,
             add_sensor,
+            max_memory,
+            max_output,
         } => {
             let s = load(&scenario)?;
             let base = Path::new(&scenario)
                 .exists()
                 .then(|| Path::new(&scenario).parent().map(Path::to_owned))
                 .flatten();
-            run_cmd::run(&run_cmd::RunArgs {
+            let stop = run_cmd::stop_flag()?;
+            let interrupted = run_cmd::run(&run_cmd::RunArgs {
                 scenario: &s,
                 base: base.as_deref(),
                 out: &out,
@@ -353,7 +384,14 @@ fn run(cli: Cli) -> Result<()> {
                 map_resolution,
                 map_max_free_range,
                 add_sensors: &add_sensor,
-            })
+                budget: radarnav::limits::budget::Budget::from_gb(max_memory, max_output),
+                stop: &stop,
+            })?;
+            if interrupted {
+                // 128 + SIGINT, as shells report a program ended by Ctrl-C.
+                std::process::exit(130);
+            }
+            Ok(())
         }
         Command::Compare {
             scenario,
@@ -420,7 +458,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             match (sim, forest) {
                 (Some(_), Some(_)) => bail!("--sim and --forest do not go together"),
-                (Some(seconds), None) => run_cmd::bench_sim(&load(&scenario)?, seconds),
+                (Some(seconds), None) => {
+                    run_cmd::bench_sim(&load(&scenario)?, seconds, &*run_cmd::stop_flag()?)
+                }
                 (None, forest) => bench_cmd::scans(load(&scenario)?, scans, forest.as_ref()),
             }
         }
@@ -431,8 +471,8 @@ fn run(cli: Cli) -> Result<()> {
 fn load(arg: &str) -> Result<Scenario> {
     let path = Path::new(arg);
     if path.exists() || arg.ends_with(".toml") {
-        let src =
-            fs::read_to_string(path).with_context(|| format!("reading scenario file {arg}"))?;
+        let src = radarnav::limits::read_text(path)
+            .with_context(|| format!("reading scenario file {arg}"))?;
         let name = path
             .file_stem()
             .map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned());
@@ -458,10 +498,18 @@ fn parse_pose(s: &str) -> Result<Pose> {
         .collect::<Result<_, _>>()
         .with_context(|| format!("--pose `{s}`: expected x,y,yaw_deg"))?;
     match v.as_slice() {
-        [x, y, yaw] if v.iter().all(|a| a.is_finite()) => {
+        [x, y, yaw] => {
+            for (what, v, limit) in [("x", x, &limits::COORD), ("y", y, &limits::COORD)]
+                .into_iter()
+                .chain([("yaw_deg", yaw, &limits::YAW)])
+            {
+                limit
+                    .check(*v)
+                    .map_err(|m| anyhow::anyhow!("--pose `{s}`: {what}: {m}"))?;
+            }
             Ok(Pose::new(*x, *y, 0.0, yaw.to_radians()))
         }
-        _ => bail!("--pose `{s}`: expected three finite numbers x,y,yaw_deg"),
+        _ => bail!("--pose `{s}`: expected three numbers x,y,yaw_deg"),
     }
 }
 
@@ -713,8 +761,7 @@ fn scan(
         "materials": materials,
         "scan": scan,
     });
-    fs::write(out.join("scan.json"), serde_json::to_vec_pretty(&json)?)
-        .context("writing scan.json")?;
+    radarnav::record::write_whole(&out.join("scan.json"), &serde_json::to_vec_pretty(&json)?)?;
     write_csv(&out.join("scan.csv"), &scan, &materials)?;
     let (signal, _) = signal_cmd::write_signal_outputs(
         &s,
@@ -739,9 +786,7 @@ fn scan(
 }
 
 fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
-    let mut w = std::io::BufWriter::new(
-        fs::File::create(path).with_context(|| format!("creating {}", path.display()))?,
-    );
+    let mut w = Vec::new();
     writeln!(
         w,
         "index,azimuth_deg,elevation_deg,range_m,hit,material,beam"
@@ -759,6 +804,5 @@ fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
             scan.beams[i].as_str()
         )?;
     }
-    w.flush()
-        .with_context(|| format!("writing {}", path.display()))
+    Ok(radarnav::record::write_whole(path, &w)?)
 }

@@ -1,14 +1,16 @@
 //! `radarnav run` and `radarnav bench --sim`: a scenario's mission driven through the
 //! simulation loop.
 
-use std::fs;
 use std::io::{IsTerminal, Write};
 use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use radarnav::Scenario;
+use radarnav::limits::budget::{self, Budget, Recording};
 use radarnav::map::{MapConfig, Mapper, PoseSource, track_coverage};
 use radarnav::mission::{MissionKind, TeleopSource, parse_teleop_csv};
 use radarnav::nav::{Idle, TeleopController};
@@ -42,7 +44,7 @@ pub fn plan<'a>(
         None => format!("scenario `{}` has no robot", s.name),
     })?;
     let read_csv = |path: &Path| -> Result<Box<dyn Controller>> {
-        let src = fs::read_to_string(path)
+        let src = radarnav::limits::read_text(path)
             .with_context(|| format!("reading teleop file {}", path.display()))?;
         let steps = parse_teleop_csv(&src, &path.display().to_string())?;
         let hz = s
@@ -125,18 +127,38 @@ fn progress_bar(steps: u64, dt: f64) -> ProgressBar {
     bar
 }
 
-/// Runs a simulation to its end with a progress bar; returns the summary and wall seconds.
+/// A flag set by the first SIGINT (Ctrl-C) or SIGTERM; a second one ends the process at
+/// once, as users expect of a program that seems stuck.
+pub fn stop_flag() -> Result<Arc<AtomicBool>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    use signal_hook::flag;
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [SIGINT, SIGTERM] {
+        // Order matters: the shutdown check must see the flag before this signal sets it.
+        flag::register_conditional_shutdown(sig, 130, Arc::clone(&stop))
+            .context("installing the signal handlers")?;
+        flag::register(sig, Arc::clone(&stop)).context("installing the signal handlers")?;
+    }
+    Ok(stop)
+}
+
+/// Runs a simulation to its end (or until `stop` is set) with a progress bar; returns the
+/// summary and wall seconds.
 fn drive<O: Observer>(
     sim: &mut Simulation<'_>,
     dt: f64,
     obs: &mut O,
+    stop: &AtomicBool,
 ) -> Result<(RunSummary, f64), O::Error> {
     let bar = progress_bar(sim.total_steps(), dt);
     let t0 = Instant::now();
-    let summary = sim.run(&mut WithProgress {
-        inner: obs,
-        bar: bar.clone(),
-    })?;
+    let summary = sim.run_until(
+        &mut WithProgress {
+            inner: obs,
+            bar: bar.clone(),
+        },
+        stop,
+    )?;
     let wall = t0.elapsed().as_secs_f64();
     bar.finish_and_clear();
     Ok((summary, wall))
@@ -160,6 +182,10 @@ pub struct RunArgs<'a> {
     pub map_max_free_range: f64,
     /// Presets to mount on the robot besides its own sensors.
     pub add_sensors: &'a [String],
+    /// Memory and output limits.
+    pub budget: Budget,
+    /// Set by a signal: the run ends at the end of the step and its files are finished.
+    pub stop: &'a AtomicBool,
 }
 
 /// `robot` with the presets `names` added (see [`Robot::with_preset_mount`]).
@@ -180,10 +206,11 @@ fn with_sensors(robot: &Robot, names: &[String]) -> Result<Robot> {
     Ok(r)
 }
 
-/// The mappers `run` builds.
-fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<Vec<Mapper>> {
+/// The mappers `run` builds, each kept to the region its sensors can reach, and their cells
+/// in all (checked against the memory budget).
+fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<(Vec<Mapper>, f64)> {
     let Some(specs) = a.maps else {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), 0.0));
     };
     let pose = PoseSource::parse(a.map_pose).with_context(|| {
         format!(
@@ -197,6 +224,12 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<Vec<Mapper>> {
         pose,
         ..MapConfig::default()
     };
+    let region = budget::map_region(
+        &a.scenario.world,
+        robot,
+        config.max_free_range,
+        config.max_range,
+    );
     let specs: Vec<String> = if specs.is_empty() {
         robot.sensors.iter().map(|s| s.name.clone()).collect()
     } else {
@@ -205,7 +238,10 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<Vec<Mapper>> {
     let maps = specs
         .iter()
         .map(|spec| {
-            Mapper::from_spec(spec, robot, config).with_context(|| format!("--maps `{spec}`"))
+            let mut m = Mapper::from_spec(spec, robot, config)
+                .with_context(|| format!("--maps `{spec}`"))?;
+            m.limit_to(region);
+            Ok(m)
         })
         .collect::<Result<Vec<_>>>()?;
     let mut names: Vec<&str> = maps.iter().map(Mapper::name).collect();
@@ -213,15 +249,15 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<Vec<Mapper>> {
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
         bail!("--maps names the map `{}` twice", w[0]);
     }
-    Ok(maps)
+    let cells = a
+        .budget
+        .check_maps(maps.iter().map(Mapper::name), region, config.resolution)?;
+    Ok((maps, cells))
 }
 
+/// The scenario's run settings with `--seed` and `--duration` (range-checked by the argument
+/// parser) applied.
 fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> Result<RunSettings> {
-    if let Some(d) = duration
-        && !(d > 0.0 && d.is_finite())
-    {
-        bail!("--duration must be a number of seconds > 0, found {d}");
-    }
     let base = RunSettings::of(s);
     Ok(RunSettings {
         seed: seed.unwrap_or(base.seed),
@@ -230,13 +266,30 @@ fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> Result<Ru
     })
 }
 
-/// `radarnav run`.
-pub fn run(a: &RunArgs<'_>) -> Result<()> {
+/// `radarnav run`; `true` when a signal cut it short (its files are whole all the same).
+pub fn run(a: &RunArgs<'_>) -> Result<bool> {
     let s = a.scenario;
     let settings = settings(s, a.seed, a.duration)?;
     let plan = plan(s, a.robot, a.teleop, a.base, false, settings.seed)?;
     let robot = with_sensors(plan.robot, a.add_sensors)?;
-    let mut maps = mappers(a, &robot)?;
+    let (mut maps, map_cells) = mappers(a, &robot)?;
+    let need = budget::run_output(
+        &robot,
+        &Recording {
+            dt: settings.dt,
+            duration: settings.duration,
+            mcap: a.mcap,
+            scans: true,
+            map_cells,
+        },
+    );
+    a.budget.check_output(
+        &format!(
+            "a run of {} s in steps of {} s",
+            settings.duration, settings.dt
+        ),
+        need,
+    )?;
     if plan.mission == "explore" {
         track_coverage(
             &s.world,
@@ -254,8 +307,24 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
     let mut rec = Recorder::create(a.out, &s.world, &robot, options)?
         .with_maps(maps)?
         .with_radar_images(&s.world, &robot, settings.seed)?;
-    let (summary, wall) = drive(&mut sim, settings.dt, &mut rec)?;
+    let (summary, wall) = drive(&mut sim, settings.dt, &mut rec, a.stop)?;
+    if sim.interrupted() {
+        eprintln!(
+            "interrupted at {:.2} s simulated: finishing the files (press Ctrl-C again to quit at once)",
+            summary.duration
+        );
+    }
+    // Scoring the maps against the world's truth takes a moment in a large world.
+    let spinner = if std::io::stderr().is_terminal() && !rec.maps().is_empty() {
+        let sp = ProgressBar::new_spinner();
+        sp.set_message("scoring the maps and writing the files");
+        sp.enable_steady_tick(std::time::Duration::from_millis(120));
+        sp
+    } else {
+        ProgressBar::hidden()
+    };
     let recorded = rec.finish(s, &robot, &summary, a.pixels)?;
+    spinner.finish_and_clear();
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -310,16 +379,17 @@ pub fn run(a: &RunArgs<'_>) -> Result<()> {
         recorded.files.len(),
         a.out.display()
     )?;
-    Ok(())
+    Ok(sim.interrupted())
 }
 
 /// `radarnav bench --sim SECONDS`: the scenario's mission (waypoints looping) for that long,
 /// with no recording; prints simulated seconds per wall second.
-pub fn bench_sim(s: &Scenario, seconds: f64) -> Result<()> {
+pub fn bench_sim(s: &Scenario, seconds: f64, stop: &AtomicBool) -> Result<()> {
     let plan = plan(s, None, None, None, true, s.sim.seed)?;
     let settings = settings(s, None, Some(seconds))?;
     let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
-    let (summary, wall) = drive(&mut sim, settings.dt, &mut NoObserver).map_err(|e| match e {})?;
+    let (summary, wall) =
+        drive(&mut sim, settings.dt, &mut NoObserver, stop).map_err(|e| match e {})?;
     let rays: f64 = plan
         .robot
         .sensors

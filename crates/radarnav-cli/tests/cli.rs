@@ -281,7 +281,7 @@ fn compare_writes_the_csvs_the_plot_and_a_table_and_rejects_bad_input() {
         ),
         (
             &["compare", "foliage-wall", "--seeds", "0"][..],
-            "--seeds must be at least 1",
+            "invalid value '0' for '--seeds <SEEDS>': expected 1 to 10000, found 0",
         ),
         (
             &["compare", "foliage-wall", "--safety", "0"][..],
@@ -314,7 +314,7 @@ fn errors_are_reported_with_location_and_exit_code_one() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1));
     assert!(
-        err.contains("bad.toml:3:38: `radius`: expected a finite number > 0, found 0"),
+        err.contains("bad.toml:3:38: `radius`: expected 0.001 to 10000 m, found 0"),
         "{err}"
     );
     for args in [
@@ -465,10 +465,7 @@ fn run_with_a_teleop_csv_and_clear_errors() {
             &["--map-pose", "gps"],
             "--map-pose `gps`: expected `truth` or `odometry`",
         ),
-        (
-            &["--map-resolution", "0"],
-            "resolution must be a finite number > 0, found 0",
-        ),
+        (&["--maps", "radar+radar"], "names the sensor `radar` twice"),
     ] {
         let mut all = vec![
             "run",
@@ -485,6 +482,35 @@ fn run_with_a_teleop_csv_and_clear_errors() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         assert!(err.contains(want), "{args:?}: {err}");
+    }
+    // Out-of-range flags are usage errors (exit 2), refused before anything is written.
+    for (args, want) in [
+        (
+            &["--map-resolution", "0"][..],
+            "expected 0.005 to 10 m, found 0",
+        ),
+        (
+            &["--map-resolution", "1e308"],
+            "expected 0.005 to 10 m, found 1e308",
+        ),
+        (
+            &["--map-resolution", "1e-6"],
+            "expected 0.005 to 10 m, found 1e-6",
+        ),
+        (&["--duration", "1e9"], "expected 0.001 to 1e6 s, found 1e9"),
+        (
+            &["--pixels", "100000"],
+            "expected 16 to 8192 px, found 100000",
+        ),
+    ] {
+        let o = dir.join("bad-flag");
+        let mut all = vec!["run", "foliage-wall", "--out", o.to_str().unwrap()];
+        all.extend_from_slice(args);
+        let out = radarnav(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!o.exists(), "{args:?} wrote {}", o.display());
     }
 
     std::fs::write(&csv, "duration,left,right\n1.0,0.3,0.3\n1.0,0.3\n").unwrap();

@@ -8,13 +8,16 @@
 //! (occupancy grids that tell seen-through from passable), [`compare`] (exploration
 //! experiments),
 //! [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs: CSV, scan logs,
-//! MCAP), [`render`] (figures), [`demo`] (the thesis experiment), [`peers`] (the scene and rays
+//! MCAP), [`files`] (outputs written whole or not at all), [`render`] (figures), [`demo`] (the thesis experiment), [`limits`] (the valid range of every input and the size
+//! estimates that bound a run), [`peers`] (the scene and rays
 //! of the benchmark against Embree and Bullet).
 
 #![warn(missing_docs)]
 
 pub mod compare;
 pub mod demo;
+pub mod files;
+pub mod limits;
 pub mod map;
 pub mod mission;
 pub mod nav;

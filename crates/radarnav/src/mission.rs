@@ -135,6 +135,7 @@ impl Mission {
 
 /// Parses a teleop CSV (see the module docs). `file` is only used in error messages.
 pub fn parse_teleop_csv(src: &str, file: &str) -> Result<Vec<TeleopStep>, MissionError> {
+    use crate::limits::{STEPS, TELEOP_DURATION, TELEOP_SPEED, TELEOP_TURN};
     let err = |line: usize, message: String| MissionError::Csv {
         file: file.to_owned(),
         line,
@@ -180,11 +181,18 @@ pub fn parse_teleop_csv(src: &str, file: &str) -> Result<Vec<TeleopStep>, Missio
                     )
                 })?;
         }
-        if vals[0] <= 0.0 {
-            return Err(err(
-                n,
-                format!("`duration`: expected a number > 0, found {}", vals[0]),
-            ));
+        let limits = if tracks {
+            [TELEOP_DURATION, TELEOP_SPEED, TELEOP_SPEED]
+        } else {
+            [TELEOP_DURATION, TELEOP_SPEED, TELEOP_TURN]
+        };
+        for ((v, limit), col) in vals.iter().zip(&limits).zip(&cols) {
+            limit
+                .check(*v)
+                .map_err(|m| err(n, format!("`{col}`: {m}")))?;
+        }
+        if !STEPS.contains((steps.len() + 1) as f64) {
+            return Err(err(n, format!("more than {} commands", STEPS.max)));
         }
         let command = if tracks {
             DriveCommand::Tracks {
@@ -238,7 +246,11 @@ mod tests {
         assert!(e("t,v,w\n").starts_with("c.csv:1: expected the header"));
         assert_eq!(
             e("duration,v,omega_deg_s\n0,1,0\n"),
-            "c.csv:2: `duration`: expected a number > 0, found 0"
+            "c.csv:2: `duration`: expected 0.001 to 1e6 s, found 0"
+        );
+        assert_eq!(
+            e("duration,left,right\n1,1e300,0\n"),
+            "c.csv:2: `left`: expected -10 to 10 m/s, found 1e300"
         );
         assert_eq!(
             e("duration,v,omega_deg_s\n1,2\n"),

@@ -23,12 +23,12 @@ use crate::world::{MaterialTable, Object, Ray, Shape, World};
 #[derive(Debug, Error)]
 pub enum SceneError {
     /// An I/O error on a file.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// A file that is not what this module writes.
     #[error("{path}: {what}")]
@@ -148,9 +148,9 @@ pub fn pose_rays(
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
-    move |source| SceneError::Io {
+    move |cause| SceneError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     }
 }
 

@@ -18,12 +18,12 @@ pub enum RenderError {
     #[error("cannot make a {0} × {1} pixel image")]
     Size(u32, u32),
     /// PNG encoding or writing failed.
-    #[error("writing {path}: {source}")]
+    #[error("writing {path}: {cause}")]
     Write {
         /// Target file.
         path: String,
         /// Cause.
-        source: Box<dyn std::error::Error + Send + Sync>,
+        cause: Box<dyn std::error::Error + Send + Sync>,
     },
 }
 
@@ -164,7 +164,13 @@ impl Figure {
 
     fn draw_grid(&mut self) {
         let span = (self.max - self.min).max_element();
-        let step = if span > 40.0 {
+        if !span.is_finite() {
+            return;
+        }
+        // At most about 40 lines whatever the world's extent: the figure costs its pixels.
+        let step = if span > 400.0 {
+            10f64.powf((span / 40.0).log10().ceil())
+        } else if span > 40.0 {
             10.0
         } else if span > 15.0 {
             5.0
@@ -491,7 +497,7 @@ impl Figure {
 pub fn encode_png(pixmap: &Pixmap) -> Result<Vec<u8>, RenderError> {
     pixmap.encode_png().map_err(|e| RenderError::Write {
         path: "<memory>".to_owned(),
-        source: Box::new(e),
+        cause: Box::new(e),
     })
 }
 
@@ -499,18 +505,10 @@ pub fn encode_png(pixmap: &Pixmap) -> Result<Vec<u8>, RenderError> {
 /// (an interrupted write leaves no half figure).
 pub fn save_png(pixmap: &Pixmap, path: &std::path::Path) -> Result<(), RenderError> {
     let bytes = encode_png(pixmap)?;
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".partial");
-    let tmp = std::path::PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            RenderError::Write {
-                path: path.display().to_string(),
-                source: Box::new(e),
-            }
-        })
+    crate::files::write_whole(path, &bytes).map_err(|e| RenderError::Write {
+        path: path.display().to_string(),
+        cause: Box::new(e),
+    })
 }
 
 /// An opaque image from packed 8-bit RGB rows (as plotting back ends draw), for

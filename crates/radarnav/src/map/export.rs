@@ -10,7 +10,6 @@
 //! * `<stem>.npy`: `float32`, shape `(2, rows, columns)`: the log-odds of layer `sensed` and of
 //!   layer `passable` (0 = unknown), row 0 the lowest y, cell (0, 0) at the YAML's `origin`.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use glam::DVec2;
@@ -27,9 +26,9 @@ pub fn files(dir: &Path, stem: &str) -> [PathBuf; 4] {
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> MapError + '_ {
-    move |source| MapError::Io {
+    move |cause| MapError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     }
 }
 
@@ -183,11 +182,11 @@ pub fn write_all(
 ) -> Result<Vec<PathBuf>, MapError> {
     let [png, pgm_path, yaml_path, npy_path] = files(dir, stem);
     save_png(&figure(grid, title, pixels, overlay)?, &png)?;
-    std::fs::write(&pgm_path, pgm(grid)).map_err(io(&pgm_path))?;
+    let whole = crate::files::write_whole;
+    whole(&pgm_path, &pgm(grid)).map_err(io(&pgm_path))?;
     let image = format!("{stem}.pgm");
-    std::fs::write(&yaml_path, yaml(grid, &image)).map_err(io(&yaml_path))?;
-    let mut f = std::fs::File::create(&npy_path).map_err(io(&npy_path))?;
-    f.write_all(&npy(grid)).map_err(io(&npy_path))?;
+    whole(&yaml_path, yaml(grid, &image).as_bytes()).map_err(io(&yaml_path))?;
+    whole(&npy_path, &npy(grid)).map_err(io(&npy_path))?;
     Ok(vec![png, pgm_path, yaml_path, npy_path])
 }
 

@@ -185,6 +185,8 @@ pub struct Grid {
     /// Number of the last update that touched each cell: a cell changes once per update.
     mark: Vec<u32>,
     updates: u32,
+    /// The rectangle the grid may grow over (`None`: anywhere), m.
+    limit: Option<(DVec2, DVec2)>,
 }
 
 impl Grid {
@@ -207,7 +209,70 @@ impl Grid {
             passable: Vec::new(),
             mark: Vec::new(),
             updates: 0,
+            limit: None,
         }
+    }
+
+    /// Keeps the grid inside the rectangle `lo..hi` (m): rays are cut at its edge (a cut
+    /// return is no return) and cells outside it are dropped, so no scan can grow the grid
+    /// past the size estimated for it (DESIGN §12).
+    pub fn limit_to(&mut self, lo: DVec2, hi: DVec2) {
+        self.limit = Some((lo, hi));
+    }
+
+    /// The rectangle set by [`Grid::limit_to`].
+    pub fn limit(&self) -> Option<(DVec2, DVec2)> {
+        self.limit
+    }
+
+    /// `beam` cut to the limit; `None` when it lies outside.
+    fn clip(&self, beam: &Beam) -> Option<Beam> {
+        let Some((lo, hi)) = self.limit else {
+            return Some(*beam);
+        };
+        // Liang–Barsky on the parameter t of from + t (to − from), t in [0, 1].
+        let d = beam.to - beam.from;
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        for (p, q) in [
+            (-d.x, beam.from.x - lo.x),
+            (d.x, hi.x - beam.from.x),
+            (-d.y, beam.from.y - lo.y),
+            (d.y, hi.y - beam.from.y),
+        ] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return None;
+                }
+            } else {
+                let t = q / p;
+                if p < 0.0 {
+                    t0 = t0.max(t);
+                } else {
+                    t1 = t1.min(t);
+                }
+            }
+        }
+        if t0 > t1 {
+            return None;
+        }
+        // Clamped: rounding must not put a cut end a hair outside the rectangle.
+        Some(Beam {
+            from: (beam.from + d * t0).clamp(lo, hi),
+            to: if t1 < 1.0 {
+                (beam.from + d * t1).clamp(lo, hi)
+            } else {
+                beam.to
+            },
+            hit: beam.hit && t1 >= 1.0,
+        })
+    }
+
+    /// Whether a cell is inside the limit.
+    fn allowed(&self, c: CellIndex) -> bool {
+        self.limit.is_none_or(|(lo, hi)| {
+            let (a, b) = (self.cell_of(lo), self.cell_of(hi));
+            (a.0..=b.0).contains(&c.0) && (a.1..=b.1).contains(&c.1)
+        })
     }
 
     /// Cell size, m.
@@ -321,6 +386,28 @@ impl Grid {
                 (hi.1 + 1).max(y1) + pad(hi.1 >= y1),
             )
         };
+        // The padding stops at the limit: the grid never outgrows its estimate.
+        let (nx0, ny0, nx1, ny1) = match self.limit {
+            Some((a, b)) => {
+                let (a, b) = (self.cell_of(a), self.cell_of(b));
+                // What must stay: the cells asked for and those already held.
+                let (k0, k1) = if self.width == 0 {
+                    (lo, (hi.0 + 1, hi.1 + 1))
+                } else {
+                    (
+                        (lo.0.min(x0), lo.1.min(y0)),
+                        ((hi.0 + 1).max(x1), (hi.1 + 1).max(y1)),
+                    )
+                };
+                (
+                    nx0.max(a.0.min(k0.0)),
+                    ny0.max(a.1.min(k0.1)),
+                    nx1.min((b.0 + 1).max(k1.0)),
+                    ny1.min((b.1 + 1).max(k1.1)),
+                )
+            }
+            None => (nx0, ny0, nx1, ny1),
+        };
         let (w, h) = ((nx1 - nx0) as usize, (ny1 - ny0) as usize);
         let mut sensed = vec![0.0; w * h];
         let mut passable = vec![0.0; w * h];
@@ -362,6 +449,13 @@ impl Grid {
     /// a ray passes through gets one miss in `sensed`, and in `passable` too when
     /// `misses_clear_passable` (the sensor stops at the first thing in its way).
     pub fn insert(&mut self, beams: &[Beam], misses_clear_passable: bool) {
+        let clipped: Vec<Beam>;
+        let beams = if self.limit.is_some() {
+            clipped = beams.iter().filter_map(|b| self.clip(b)).collect();
+            &clipped[..]
+        } else {
+            beams
+        };
         if beams.is_empty() {
             return;
         }
@@ -417,7 +511,7 @@ impl Grid {
         occupied: bool,
         layers: Layers,
     ) {
-        let cells: Vec<CellIndex> = cells.into_iter().collect();
+        let cells: Vec<CellIndex> = cells.into_iter().filter(|&c| self.allowed(c)).collect();
         let Some(&first) = cells.first() else {
             return;
         };
@@ -528,6 +622,46 @@ mod tests {
         assert_eq!(g.log_odds((-500, 300)), (logit(0.7), 0.0));
         assert_eq!(g.log_odds((700, -40)), (0.0, logit(0.4)));
         assert_eq!(g.width() * g.height(), g.sensed().len());
+    }
+
+    proptest::proptest! {
+        /// A limited grid never grows past its rectangle, and inside it holds what an
+        /// unlimited grid holds for the same beams (cut at the edge, a cut return is no hit).
+        #[test]
+        fn a_limited_grid_stays_inside_and_agrees_inside(
+            beams in proptest::collection::vec(
+                (-30.0f64..30.0, -30.0f64..30.0, -30.0f64..30.0, -30.0f64..30.0, proptest::bool::ANY),
+                1..20,
+            ),
+        ) {
+            let (lo, hi) = (DVec2::new(-5.0, -3.0), DVec2::new(4.0, 6.0));
+            let mut limited = grid();
+            limited.limit_to(lo, hi);
+            let mut free = grid();
+            let beams: Vec<Beam> = beams
+                .iter()
+                .map(|&(a, b, c, d, hit)| Beam { from: DVec2::new(a, b), to: DVec2::new(c, d), hit })
+                .collect();
+            limited.insert(&beams, true);
+            free.insert(&beams, true);
+            let (a, b) = (limited.cell_of(lo), limited.cell_of(hi));
+            if limited.width() > 0 {
+                let o = limited.origin_cell();
+                proptest::prop_assert!(o.0 >= a.0 && o.1 >= a.1);
+                proptest::prop_assert!(o.0 + limited.width() as i64 - 1 <= b.0);
+                proptest::prop_assert!(o.1 + limited.height() as i64 - 1 <= b.1);
+            }
+            // Cells well inside (a cell from the edge: a ray cut there may end a cell early).
+            for i in a.0 + 1..b.0 {
+                for j in a.1 + 1..b.1 {
+                    let (l, f) = (limited.log_odds((i, j)), free.log_odds((i, j)));
+                    let hit_only = beams.iter().any(|b| b.hit && free.cell_of(b.to) == (i, j));
+                    if !hit_only {
+                        proptest::prop_assert_eq!(l, f, "cell {:?}", (i, j));
+                    }
+                }
+            }
+        }
     }
 
     #[test]

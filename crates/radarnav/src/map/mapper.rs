@@ -200,12 +200,23 @@ impl Mapper {
         })
     }
 
+    /// Keeps the map inside `region` (m): see [`Grid::limit_to`].
+    pub fn limit_to(&mut self, region: (DVec2, DVec2)) {
+        self.grid.limit_to(region.0, region.1);
+    }
+
     /// A mapper from a spec `a+b+…` of sensor names, named after it (`radar`, `radar+laser`).
     pub fn from_spec(spec: &str, robot: &Robot, config: MapConfig) -> Result<Self, MapError> {
         let names: Vec<&str> = spec.split('+').map(str::trim).collect();
         if names.iter().any(|n| n.is_empty()) {
             return Err(MapError::Config(format!(
                 "map `{spec}`: expected sensor names joined by `+`"
+            )));
+        }
+        let twice = (1..names.len()).find(|&i| names[..i].contains(&names[i]));
+        if let Some(n) = twice.map(|i| names[i]) {
+            return Err(MapError::Config(format!(
+                "map `{spec}` names the sensor `{n}` twice"
             )));
         }
         Self::new(&names.join("+"), robot, &names, config)

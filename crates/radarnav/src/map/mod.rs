@@ -41,12 +41,12 @@ pub enum MapError {
     #[error("map: {0}")]
     Config(String),
     /// A file could not be written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: std::path::PathBuf,
         /// Cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The PNG could not be drawn.
     #[error(transparent)]

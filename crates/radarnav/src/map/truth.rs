@@ -3,7 +3,9 @@
 //! The truth raster covers the world's bounding rectangle in the map's cells. A cell is an
 //! *obstacle* when a non-traversable object overlaps its column from the ground up to the scan
 //! plane (or the vehicle's height, if higher); otherwise it is *free*. Free cells are split
-//! by what can be seen, in the scan plane, from anywhere the robot can reach from its start:
+//! by what can be seen, in the scan plane, from anywhere the robot can reach from its start
+//! (viewpoints 0.5 m apart, spread wider when there would be more than 1024; sight up to the
+//! 30 m of the laser that defines "seen"):
 //! *hidden* cells are in sight only through penetrable matter (foliage, smoke): a laser
 //! cannot see them, an ideal radar with an endless budget could. This is the area behind the
 //! foliage wall. *Outside* cells are out of sight even through foliage (beyond the room's
@@ -40,6 +42,9 @@ pub enum TruthCell {
 const VIEWPOINT_SPACING: f64 = 0.5;
 /// Azimuths per viewpoint.
 const VIEW_RAYS: usize = 720;
+/// Most viewpoints: in a larger world they are spread wider, so scoring costs what a
+/// 16 x 16 m area costs at most, not what the world's extent does (DESIGN §12).
+const MAX_VIEWPOINTS: usize = 1024;
 
 /// A world rasterised for scoring.
 #[derive(Clone, Debug)]
@@ -104,6 +109,10 @@ impl Truth {
             .collect();
         let reachable = flood_fill(&fits, width, height, cell_of(start.xy(), resolution), c0);
         let stride = ((VIEWPOINT_SPACING / resolution).round() as usize).max(1);
+        let open = reachable.iter().filter(|&&r| r).count();
+        let planned = open as f64 / (stride * stride) as f64;
+        let spread = ((planned / MAX_VIEWPOINTS as f64).sqrt().ceil() as usize).max(1);
+        let stride = stride * spread;
         let start_k = index_in(cell_of(start.xy(), resolution), c0, width, height);
         let viewpoints: Vec<usize> = (0..width * height)
             .filter(|&k| {
@@ -112,7 +121,8 @@ impl Truth {
             })
             .collect();
         let laser = preset("hokuyo_utm30lx").expect("built-in preset");
-        let reach = (hi - lo).truncate().length() + 1.0;
+        // Sight ends at the laser's range: farther cells no sensor maps from there.
+        let reach = ((hi - lo).truncate().length() + 1.0).min(laser.range_max);
         // Per cell: bit 0 seen by the laser, bit 1 in sight through penetrable matter.
         let seen = viewpoints
             .par_iter()

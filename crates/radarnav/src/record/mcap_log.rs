@@ -21,8 +21,9 @@
 //!   k-strongest detections in the frame `world` (each from the pose of its own row), fields
 //!   `x`, `y`, `z` (float32) and `power` (uint8, the image's value).
 //! * `/<robot>/path` (`foxglove.PosesInFrame`, once at the end): the driven path.
-//! * `/<robot>/map/<name>` (`foxglove.Grid`, frame `world`, every [`super::GRID_PERIOD`] s and
-//!   at the end): each occupancy map, cropped to its known cells. Fields `red`, `green`,
+//! * `/<robot>/map/<name>` (`foxglove.Grid`, frame `world`, every [`super::GRID_PERIOD`] s,
+//!   or every few periods while the maps exceed [`super::GRID_BYTES_PER_PERIOD`], and at the
+//!   end): each occupancy map, cropped to its known cells. Fields `red`, `green`,
 //!   `blue`, `alpha` (the thesis' palette; unknown cells half transparent) and `class`
 //!   (0 unknown, 1 sensor-clear, 2 seen through but impassable, 3 obstacle), all `uint8`.
 
@@ -125,8 +126,16 @@ fn field(name: &str, offset: u32, kind: NumericType) -> PackedElementField {
     }
 }
 
-fn mcap_err(e: impl std::fmt::Display) -> RecordError {
-    RecordError::Mcap(e.to_string())
+fn mcap_err(e: mcap::McapError) -> RecordError {
+    match e {
+        // Keep the OS error (disk full, permission): the recorder names the file.
+        mcap::McapError::Io(io) => RecordError::McapIo(io),
+        other => RecordError::Mcap(other.to_string()),
+    }
+}
+
+fn mcap_msg(m: &str) -> RecordError {
+    RecordError::Mcap(m.to_owned())
 }
 
 impl<W: Write + Seek> McapLog<W> {
@@ -139,7 +148,7 @@ impl<W: Write + Seek> McapLog<W> {
         let mut out = opts.create(out).map_err(mcap_err)?;
         let name = robot.name.clone();
         let mut channel = |topic: &str, schema: Option<foxglove::Schema>| {
-            let schema = schema.ok_or_else(|| mcap_err("schema missing"))?;
+            let schema = schema.ok_or_else(|| mcap_msg("schema missing"))?;
             let id = out
                 .add_schema(&schema.name, &schema.encoding, &schema.data)
                 .map_err(mcap_err)?;
@@ -218,7 +227,7 @@ impl<W: Write + Seek> McapLog<W> {
     fn write<T: Encode>(&mut self, channel: u16, t: f64, msg: &T) -> Result<(), RecordError> {
         self.buf.clear();
         msg.encode(&mut self.buf)
-            .map_err(|_| mcap_err("protobuf encoding failed"))?;
+            .map_err(|_| mcap_msg("protobuf encoding failed"))?;
         self.sequence += 1;
         let header = mcap::records::MessageHeader {
             channel_id: channel,
@@ -356,7 +365,7 @@ impl<W: Write + Seek> McapLog<W> {
 
     /// Adds a channel for the map `name`; returns its index for [`McapLog::grid`].
     pub fn add_map(&mut self, name: &str) -> Result<usize, RecordError> {
-        let schema = FgGrid::get_schema().ok_or_else(|| mcap_err("schema missing"))?;
+        let schema = FgGrid::get_schema().ok_or_else(|| mcap_msg("schema missing"))?;
         let id = self
             .out
             .add_schema(&schema.name, &schema.encoding, &schema.data)
@@ -371,10 +380,10 @@ impl<W: Write + Seek> McapLog<W> {
     }
 
     /// Logs map `map` (an index from [`McapLog::add_map`]) as it is at time `t`; nothing while
-    /// the map is empty.
-    pub fn grid(&mut self, map: usize, t: f64, grid: &Grid) -> Result<(), RecordError> {
+    /// the map is empty. Returns the bytes of cell data logged.
+    pub fn grid(&mut self, map: usize, t: f64, grid: &Grid) -> Result<usize, RecordError> {
         let Some(((c0, c1), (r0, r1))) = known_extent(grid, 0) else {
-            return Ok(());
+            return Ok(0);
         };
         let (w, h) = (c1 - c0 + 1, r1 - r0 + 1);
         let mut data = Vec::with_capacity(w * h * 5);
@@ -408,7 +417,8 @@ impl<W: Write + Seek> McapLog<W> {
             data: data.into(),
         };
         let ch = self.maps[map];
-        self.write(ch, t, &msg)
+        self.write(ch, t, &msg)?;
+        Ok(w * h * 5)
     }
 
     /// Logs the driven `path` and closes the file; returns the sink.

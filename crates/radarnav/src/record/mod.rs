@@ -20,6 +20,8 @@ pub mod scan_log;
 pub use scan_log::{ScanLogError, ScanLogHeader, ScanLogWriter, read_scan_log};
 
 use std::fs::File;
+
+use crate::files::Staged;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -39,16 +41,19 @@ use crate::world::World;
 #[derive(Debug, Error)]
 pub enum RecordError {
     /// A file could not be created or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// Cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The MCAP writer failed.
     #[error("MCAP: {0}")]
     Mcap(String),
+    /// The MCAP writer's file could not be written (the recorder names the file).
+    #[error("MCAP: {0}")]
+    McapIo(std::io::Error),
     /// The path figure failed.
     #[error(transparent)]
     Render(#[from] RenderError),
@@ -57,8 +62,12 @@ pub enum RecordError {
     Map(#[from] MapError),
 }
 
-/// Simulated seconds between two map messages in the MCAP recording.
+/// Simulated seconds between two map messages in the MCAP recording, at least.
 pub const GRID_PERIOD: f64 = 1.0;
+
+/// Most bytes of map messages per [`GRID_PERIOD`]: larger maps are logged every few periods,
+/// so a large map adds at most this much to the MCAP a simulated second.
+pub const GRID_BYTES_PER_PERIOD: usize = 4_000_000;
 
 /// What to record.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -207,6 +216,8 @@ struct ImageFiles {
 /// Records a run: pass it to [`crate::sim::Simulation::run`], then call [`Recorder::finish`].
 pub struct Recorder<'w> {
     dir: PathBuf,
+    /// The growing files, under their temporary names until [`Recorder::finish`].
+    staged: Staged,
     trajectory: Out,
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
     #[cfg(feature = "mcap")]
@@ -222,29 +233,31 @@ pub struct Recorder<'w> {
     images: Option<(radar_images::RadarImager<'w>, Vec<ImageFiles>)>,
 }
 
-fn create(path: &Path) -> Result<Out, RecordError> {
-    File::create(path)
-        .map(BufWriter::new)
-        .map_err(|source| RecordError::Io {
-            path: path.to_owned(),
-            source,
-        })
+fn create(staged: &mut Staged, path: &Path) -> Result<Out, RecordError> {
+    staged.create(path).map(BufWriter::new).map_err(io_at(path))
 }
 
-/// Writes `path` whole or not at all: to a temporary name beside it (`<name>.partial`), then
-/// renamed.
+/// Writes `path` whole or not at all (see [`crate::files::write_whole`]).
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".partial");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes).map_err(io_at(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(io_at(path))
+    crate::files::write_whole(path, bytes).map_err(io_at(path))
+}
+
+/// An MCAP error with its I/O cause tied to the MCAP file.
+#[cfg(feature = "mcap")]
+fn at_mcap(dir: &Path) -> impl FnOnce(RecordError) -> RecordError + '_ {
+    move |e| match e {
+        RecordError::McapIo(cause) => RecordError::Io {
+            path: dir.join(files::MCAP),
+            cause,
+        },
+        e => e,
+    }
 }
 
 fn io_at(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
-    move |source| RecordError::Io {
+    move |cause| RecordError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     }
 }
 
@@ -257,43 +270,48 @@ impl<'w> Recorder<'w> {
         options: RecordOptions,
     ) -> Result<Self, RecordError> {
         std::fs::create_dir_all(dir).map_err(io_at(dir))?;
-        let mut written = Vec::new();
+        let mut staged = Staged::default();
         let tpath = dir.join(files::TRAJECTORY);
-        let mut trajectory = create(&tpath)?;
+        let mut trajectory = create(&mut staged, &tpath)?;
         writeln!(
             trajectory,
             "time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped"
         )
         .map_err(io_at(&tpath))?;
-        written.push(tpath);
         let mut scan_logs = Vec::new();
         if options.scans && !robot.sensors.is_empty() {
             let sdir = dir.join(files::SCANS);
             std::fs::create_dir_all(&sdir).map_err(io_at(&sdir))?;
             for s in &robot.sensors {
                 let path = sdir.join(format!("{}.rnscan", s.name));
-                let w =
-                    ScanLogWriter::new(create(&path)?, &ScanLogHeader::new(s, world.materials()))
-                        .map_err(io_at(&path))?;
+                let w = ScanLogWriter::new(
+                    create(&mut staged, &path)?,
+                    &ScanLogHeader::new(s, world.materials()),
+                )
+                .map_err(io_at(&path))?;
                 scan_logs.push((path, w));
             }
         }
         #[cfg(feature = "mcap")]
         let mcap = if options.mcap {
             let path = dir.join(files::MCAP);
-            Some(mcap_log::McapLog::new(create(&path)?, world, robot)?)
+            Some(
+                mcap_log::McapLog::new(create(&mut staged, &path)?, world, robot)
+                    .map_err(at_mcap(dir))?,
+            )
         } else {
             None
         };
         Ok(Self {
             dir: dir.to_owned(),
+            staged,
             trajectory,
             scan_logs,
             #[cfg(feature = "mcap")]
             mcap,
             paths: PathTrace::default(),
             vehicle: robot.vehicle,
-            written,
+            written: Vec::new(),
             maps: Vec::new(),
             next_grid: 0.0,
             images: None,
@@ -319,7 +337,7 @@ impl<'w> Recorder<'w> {
                 .join(&robot.sensors[sensor].name);
             std::fs::create_dir_all(&dir).map_err(io_at(&dir))?;
             let path = dir.join(files::RADAR_DETECTIONS);
-            let mut detections = create(&path)?;
+            let mut detections = create(&mut self.staged, &path)?;
             writeln!(
                 detections,
                 "stamp_us,row,azimuth_deg,bin,range_m,power,x,y,z"
@@ -372,7 +390,7 @@ impl<'w> Recorder<'w> {
         }
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
-            m.radar_image(sweep, &png)?;
+            m.radar_image(sweep, &png).map_err(at_mcap(&self.dir))?;
         }
         Ok(())
     }
@@ -384,7 +402,7 @@ impl<'w> Recorder<'w> {
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
             for map in &maps {
-                m.add_map(map.name())?;
+                m.add_map(map.name()).map_err(at_mcap(&self.dir))?;
             }
         }
         self.maps = maps;
@@ -396,14 +414,16 @@ impl<'w> Recorder<'w> {
         &self.maps
     }
 
+    /// Logs every map; returns the bytes of cell data written.
     #[cfg(feature = "mcap")]
-    fn log_grids(&mut self, t: f64) -> Result<(), RecordError> {
+    fn log_grids(&mut self, t: f64) -> Result<usize, RecordError> {
+        let mut bytes = 0;
         if let Some(m) = &mut self.mcap {
             for (i, map) in self.maps.iter().enumerate() {
-                m.grid(i, t, map.grid())?;
+                bytes += m.grid(i, t, map.grid()).map_err(at_mcap(&self.dir))?;
             }
         }
-        Ok(())
+        Ok(bytes)
     }
 
     /// Writes the summary, the path figure and the maps, closes every file and says what
@@ -421,14 +441,12 @@ impl<'w> Recorder<'w> {
         self.log_grids(summary.duration)?;
         for (path, log) in std::mem::take(&mut self.scan_logs) {
             log.finish().map_err(io_at(&path))?;
-            self.written.push(path);
         }
         // Rotations still turning at the end are dropped (see `radar_images`).
         if let Some((_, files)) = self.images.take() {
             for mut f in files {
                 let path = f.dir.join(files::RADAR_DETECTIONS);
                 f.detections.flush().map_err(io_at(&path))?;
-                self.written.push(path);
                 let path = f.dir.join(files::RADAR_TIMESTAMPS);
                 write_whole(&path, f.timestamps.as_bytes())?;
                 self.written.push(path);
@@ -439,11 +457,17 @@ impl<'w> Recorder<'w> {
         #[cfg(feature = "mcap")]
         if let Some(m) = self.mcap.take() {
             let path = self.dir.join(files::MCAP);
-            m.finish(summary.duration, self.paths.truth.poses())?
+            m.finish(summary.duration, self.paths.truth.poses())
+                .map_err(at_mcap(&self.dir))?
                 .flush()
                 .map_err(io_at(&path))?;
-            self.written.push(path);
         }
+        // Every growing file is complete: give each its name.
+        let committed = self
+            .staged
+            .commit()
+            .map_err(|(path, cause)| RecordError::Io { path, cause })?;
+        self.written.extend(committed);
         let png = self.dir.join(files::PATH_PNG);
         let fig = self.paths.figure(
             &scenario.world,
@@ -476,7 +500,7 @@ impl<'w> Recorder<'w> {
                     ));
                 }
             }
-            std::fs::write(&path, csv).map_err(io_at(&path))?;
+            write_whole(&path, csv.as_bytes())?;
             self.written.push(path);
         }
         let scores = score_maps(&scenario.world, robot.vehicle, &robot.start, &self.maps);
@@ -519,7 +543,7 @@ impl<'w> Recorder<'w> {
         let mut json = serde_json::to_string_pretty(&report)
             .map_err(|e| io_at(&spath)(std::io::Error::other(e)))?;
         json.push('\n');
-        std::fs::write(&spath, json).map_err(io_at(&spath))?;
+        write_whole(&spath, json.as_bytes())?;
         self.written.push(spath);
         Ok(Recorded {
             files: self.written,
@@ -598,7 +622,7 @@ impl Observer for Recorder<'_> {
         }
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
-            m.scan(sensor, scan)?;
+            m.scan(sensor, scan).map_err(at_mcap(&self.dir))?;
         }
         if let Some((imager, _)) = &mut self.images {
             imager.on_scan(sensor, scan.stamp);
@@ -613,8 +637,9 @@ impl Observer for Recorder<'_> {
         }
         #[cfg(feature = "mcap")]
         if s.time >= self.next_grid {
-            self.log_grids(s.time)?;
-            self.next_grid += GRID_PERIOD;
+            let bytes = self.log_grids(s.time)?;
+            let periods = bytes.div_ceil(GRID_BYTES_PER_PERIOD).max(1);
+            self.next_grid += GRID_PERIOD * periods as f64;
         }
         let (t, o) = (&s.truth, &s.odometry);
         let (left, right) = self.vehicle.tracks(s.command);
@@ -635,13 +660,13 @@ impl Observer for Recorder<'_> {
             right,
             u8::from(s.bumped)
         )
-        .map_err(|source| RecordError::Io {
+        .map_err(|cause| RecordError::Io {
             path: self.dir.join(files::TRAJECTORY),
-            source,
+            cause,
         })?;
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
-            m.step(s)?;
+            m.step(s).map_err(at_mcap(&self.dir))?;
         }
         let sweeps = match &mut self.images {
             Some((imager, _)) => imager.on_step(s),

@@ -247,6 +247,17 @@ pub fn read_scan_log(bytes: &[u8]) -> Result<(ScanLogHeader, Vec<Scan>), ScanLog
         .ok_or_else(|| ScanLogError::Header("header runs past the end".into()))?;
     let header: ScanLogHeader =
         serde_json::from_slice(json).map_err(|e| ScanLogError::Header(e.to_string()))?;
+    // A header from another writer (or a damaged one) must not size a record beyond what a
+    // sensor can have: the products below would overflow.
+    let rays = header.azimuths.checked_mul(header.elevations.len());
+    if rays.is_none_or(|r| r > crate::sensor::MAX_RAYS) || header.max_echoes > 64 {
+        return Err(ScanLogError::Header(format!(
+            "{} azimuths x {} planes x {} echoes is more than a sensor has",
+            header.azimuths,
+            header.elevations.len(),
+            header.max_echoes
+        )));
+    }
     let n = header.rays();
     let record = header.record_len();
     let body = &bytes[12 + len..];

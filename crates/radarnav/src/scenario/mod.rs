@@ -286,6 +286,16 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                 format!("material `{}` is defined twice", m.name),
             ));
         }
+        if MaterialTable::default().id(&m.name).is_some() {
+            return Err(ctx.err(
+                span,
+                Some("name"),
+                format!(
+                    "`{0}` is a built-in material; give yours another name (with `base = \"{0}\"` to start from it)",
+                    m.name
+                ),
+            ));
+        }
         seen.push(&m.name);
         let base = match &m.base {
             Some(b) => {
@@ -525,8 +535,12 @@ fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, Scenari
         yaw_drift: o.yaw_drift_deg_s.map_or(d.yaw_drift, |v| v.0.to_radians()),
         yaw_noise: o.yaw_noise_deg_s.map_or(d.yaw_noise, |v| v.0.to_radians()),
     };
-    if !(odometry.speed_noise.is_finite() && odometry.yaw_noise.is_finite()) {
-        return Err(ctx.err(r.span(), Some("odometry"), "odometry noise must be finite"));
+    if odometry.yaw_noise < 0.0 {
+        return Err(ctx.err(
+            r.span(),
+            Some("yaw_noise_deg_s"),
+            "a noise's standard deviation must be >= 0",
+        ));
     }
     Ok(Robot {
         name: spec.name.clone(),

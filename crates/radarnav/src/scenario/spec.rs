@@ -5,8 +5,10 @@ use serde::Deserialize;
 use serde::de::{Deserializer, Error as _};
 use toml::Spanned;
 
+use crate::limits;
+
 macro_rules! checked_f64 {
-    ($(#[$doc:meta] $name:ident: $ok:expr, $what:literal;)*) => {$(
+    ($(#[$doc:meta] $name:ident: $limit:path;)*) => {$(
         #[$doc]
         #[derive(Clone, Copy, Debug, PartialEq)]
         pub struct $name(pub f64);
@@ -14,32 +16,122 @@ macro_rules! checked_f64 {
         impl<'de> Deserialize<'de> for $name {
             fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
                 let v = f64::deserialize(d)?;
-                let ok: fn(f64) -> bool = $ok;
-                if ok(v) {
-                    Ok(Self(v))
-                } else {
-                    Err(D::Error::custom(format!("expected {}, found {v}", $what)))
-                }
+                $limit.check(v).map(Self).map_err(D::Error::custom)
             }
         }
     )*};
 }
 
 checked_f64! {
-    /// A finite number.
-    Finite: f64::is_finite, "a finite number";
-    /// A finite number > 0.
-    Positive: |v| v.is_finite() && v > 0.0, "a finite number > 0";
-    /// A number ≥ 0; `inf` allowed (a solid's attenuation).
-    NonNegative: |v| v >= 0.0, "a number >= 0";
-    /// A number in [0, 1].
-    Fraction: |v| (0.0..=1.0).contains(&v), "a number from 0 to 1";
+    /// A coordinate, m.
+    Coord: limits::COORD;
+    /// A size, m.
+    Size: limits::SIZE;
+    /// A heading, degrees.
+    Yaw: limits::YAW;
+    /// A sensor's offset on the robot, m.
+    Mount: limits::MOUNT;
+    /// A step, s.
+    Dt: limits::DT;
+    /// A run's length, s.
+    Duration: limits::DURATION;
+    /// A one-way attenuation, dB/m; `inf` for a solid.
+    Attenuation: limits::ATTENUATION;
+    /// A power fraction.
+    Fraction: limits::REFLECTIVITY;
     /// A volume backscatter coefficient, 1/m.
-    Backscatter: |v| (0.0..=10.0).contains(&v), "a number from 0 to 10 (1/m)";
+    Backscatter: limits::BACKSCATTER;
     /// A laser extinction coefficient, 1/m.
-    Extinction: |v| (0.0..=100.0).contains(&v), "a number from 0 to 100 (1/m)";
+    Extinction: limits::EXTINCTION;
     /// A lobe width in degrees.
-    LobeDeg: |v| (0.1..=90.0).contains(&v), "a number from 0.1 to 90 (degrees)";
+    LobeDeg: limits::LOBE;
+    /// Relative odometry speed noise.
+    SpeedNoise: limits::SPEED_NOISE;
+    /// Odometry yaw drift or noise, degrees/s.
+    YawRate: limits::YAW_RATE_NOISE;
+    /// Field of view, degrees.
+    Fov: limits::FOV;
+    /// Angular step, degrees.
+    AngleStep: limits::RESOLUTION;
+    /// A range, m.
+    Range: limits::RANGE;
+    /// A scan rate, Hz.
+    Rate: limits::RATE;
+    /// A scan plane, degrees.
+    Elevation: limits::ELEVATION;
+    /// Absolute range noise, m.
+    RangeNoise: limits::RANGE_NOISE;
+    /// Relative range noise.
+    RangeNoiseRel: limits::RANGE_NOISE_REL;
+    /// A penetration budget, dB.
+    Penetration: limits::PENETRATION;
+    /// A side-beam offset, m.
+    SideBeam: limits::SIDE_BEAM;
+    /// A range bin, m.
+    RangeBin: limits::RANGE_BIN;
+    /// A dynamic or display range, dB.
+    DynamicRange: limits::DYNAMIC_RANGE;
+    /// A threshold or noise floor, dB.
+    Threshold: limits::THRESHOLD;
+    /// A beam width, degrees.
+    Beamwidth: limits::BEAMWIDTH;
+    /// A chirp bandwidth, Hz.
+    Bandwidth: limits::BANDWIDTH;
+    /// A cruise speed, m/s.
+    Speed: limits::SPEED;
+    /// A tolerance, m.
+    Tolerance: limits::TOLERANCE;
+    /// A controller rate, Hz.
+    ControllerHz: limits::CONTROLLER_HZ;
+    /// A bumper distance, m.
+    Bumper: limits::BUMPER;
+    /// A teleop step's length, s.
+    StepDuration: limits::TELEOP_DURATION;
+    /// A teleop speed, m/s.
+    TeleopSpeed: limits::TELEOP_SPEED;
+    /// A teleop turn rate, degrees/s.
+    TeleopTurn: limits::TELEOP_TURN;
+}
+
+/// A list of at most `N`-limit entries: longer lists are refused while they are read.
+fn bounded_vec<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+    limit: &limits::Limit,
+) -> Result<Vec<T>, D::Error> {
+    let v = Vec::<T>::deserialize(d)?;
+    limit
+        .check(v.len() as f64)
+        .map_err(|m| D::Error::custom(format!("{}: {m}", limit.key)))?;
+    Ok(v)
+}
+
+fn points<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Xy>, D::Error> {
+    bounded_vec(d, &limits::POINTS)
+}
+
+fn steps<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<Xy>>, D::Error> {
+    bounded_vec(d, &limits::STEPS).map(Some)
+}
+
+fn commands<'de, D: Deserializer<'de>>(
+    d: D,
+) -> Result<Option<Vec<Spanned<TeleopStepSpec>>>, D::Error> {
+    bounded_vec(d, &limits::STEPS).map(Some)
+}
+
+fn objects<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Spanned<ObjectSpec>>, D::Error> {
+    bounded_vec(d, &limits::OBJECTS)
+}
+
+fn elevations<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<Elevation>>, D::Error> {
+    let v = Vec::<Elevation>::deserialize(d)?;
+    if v.is_empty() || v.len() > 1024 {
+        return Err(D::Error::custom(format!(
+            "expected 1 to 1024 scan planes, found {}",
+            v.len()
+        )));
+    }
+    Ok(Some(v))
 }
 
 /// A point `[x, y]` (resting on the ground) or `[x, y, z]`.
@@ -53,7 +145,7 @@ pub struct Center {
 
 impl<'de> Deserialize<'de> for Center {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = Vec::<Finite>::deserialize(d)?;
+        let v = Vec::<Coord>::deserialize(d)?;
         match v.as_slice() {
             [x, y] => Ok(Self {
                 xy: [x.0, y.0],
@@ -72,7 +164,7 @@ impl<'de> Deserialize<'de> for Center {
 }
 
 /// A point in the xy plane.
-pub type Xy = [Finite; 2];
+pub type Xy = [Coord; 2];
 
 /// The whole file.
 #[derive(Debug, Deserialize)]
@@ -88,7 +180,7 @@ pub struct ScenarioSpec {
     #[serde(default, rename = "material")]
     pub materials: Vec<Spanned<MaterialSpec>>,
     /// Objects.
-    #[serde(default, rename = "object")]
+    #[serde(default, rename = "object", deserialize_with = "objects")]
     pub objects: Vec<Spanned<ObjectSpec>>,
     /// Robots.
     #[serde(default, rename = "robot")]
@@ -111,9 +203,9 @@ pub struct MissionSpec {
     /// bug: the goal, `[x, y]`.
     pub goal: Option<Xy>,
     /// bug2: distance to the m-line that counts as on it, m (default 0.1).
-    pub mline_tolerance: Option<Positive>,
+    pub mline_tolerance: Option<Tolerance>,
     /// bug: distance to a hit or leave point that counts as back at it, m (default 0.75).
-    pub loop_tolerance: Option<Positive>,
+    pub loop_tolerance: Option<Tolerance>,
     /// bug, explore: side the obstacle is kept on when following it, `left` or `right`.
     pub follow: Option<Spanned<String>>,
     /// bug, explore: the pose navigation believes, `odometry` (default) or `truth`.
@@ -123,18 +215,20 @@ pub struct MissionSpec {
     /// The robot that runs it (default: the first).
     pub robot: Option<Spanned<String>>,
     /// How often the controller is called, Hz (default 10).
-    pub controller_hz: Option<Positive>,
+    pub controller_hz: Option<ControllerHz>,
     /// teleop: the commands, in order.
+    #[serde(default, deserialize_with = "commands")]
     pub commands: Option<Vec<Spanned<TeleopStepSpec>>>,
     /// teleop: a CSV file of commands, relative to the scenario file.
     pub file: Option<Spanned<String>>,
     /// waypoints: the points to visit, `[x, y]` each.
+    #[serde(default, deserialize_with = "steps")]
     pub points: Option<Vec<Xy>>,
     /// waypoints, bug, explore: cruise speed, m/s (default 0.5 for waypoints, 0.4 otherwise).
-    pub speed: Option<Positive>,
+    pub speed: Option<Speed>,
     /// waypoints, bug: distance at which a point counts as reached, m (default 0.15 for
     /// waypoints, 0.3 for a bug goal).
-    pub tolerance: Option<Positive>,
+    pub tolerance: Option<Tolerance>,
     /// waypoints: start over after the last point (default false).
     #[serde(rename = "loop")]
     pub repeat: Option<bool>,
@@ -147,9 +241,9 @@ pub struct BumperSpec {
     /// 4 or 8 (default 8).
     pub sectors: Option<Spanned<i64>>,
     /// Safety distance from the robot's centre, m (default 2.5 vehicle lengths).
-    pub safety: Option<Positive>,
+    pub safety: Option<Bumper>,
     /// Pressed band beyond the safety distance, m (default 0.5).
-    pub band: Option<Positive>,
+    pub band: Option<Bumper>,
     /// `all` (default), `any` or `fraction:p`.
     pub rule: Option<Spanned<String>>,
     /// The sensor feeding the bumpers (default: the robot's first).
@@ -161,15 +255,15 @@ pub struct BumperSpec {
 #[serde(deny_unknown_fields)]
 pub struct TeleopStepSpec {
     /// How long the command is held, s.
-    pub duration: Positive,
+    pub duration: StepDuration,
     /// Forward speed, m/s.
-    pub v: Option<Finite>,
+    pub v: Option<TeleopSpeed>,
     /// Turn rate, degrees/s counter-clockwise.
-    pub omega_deg_s: Option<Finite>,
+    pub omega_deg_s: Option<TeleopTurn>,
     /// Left track speed, m/s.
-    pub left: Option<Finite>,
+    pub left: Option<TeleopSpeed>,
     /// Right track speed, m/s.
-    pub right: Option<Finite>,
+    pub right: Option<TeleopSpeed>,
 }
 
 /// `[sim]`.
@@ -178,21 +272,21 @@ pub struct TeleopStepSpec {
 pub struct SimSpec {
     /// Step, seconds.
     #[serde(default = "default_dt")]
-    pub dt: Positive,
+    pub dt: Dt,
     /// Length of a run, seconds.
     #[serde(default = "default_duration")]
-    pub duration: Positive,
+    pub duration: Duration,
     /// Seed of the run's RNG.
     #[serde(default)]
     pub seed: u64,
 }
 
-fn default_dt() -> Positive {
-    Positive(0.05)
+fn default_dt() -> Dt {
+    Dt(0.05)
 }
 
-fn default_duration() -> Positive {
-    Positive(60.0)
+fn default_duration() -> Duration {
+    Duration(60.0)
 }
 
 impl Default for SimSpec {
@@ -209,12 +303,12 @@ impl Default for SimSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
-    /// Unique name; re-using a built-in's name replaces it.
+    /// Unique name, not a built-in's (derive from one with `base`).
     pub name: String,
     /// Material whose values the unset fields take.
     pub base: Option<Spanned<String>>,
     /// One-way dB/m; `inf` for a solid.
-    pub radar_attenuation_db_per_m: Option<NonNegative>,
+    pub radar_attenuation_db_per_m: Option<Attenuation>,
     /// Power fraction reflected at entry.
     pub radar_reflectivity: Option<Fraction>,
     /// Mirror-like to radar.
@@ -226,7 +320,7 @@ pub struct MaterialSpec {
     /// Stops a laser at its surface.
     pub laser_opaque: Option<bool>,
     /// Laser dB/m when not opaque (default for an aerosol: 4.343 × its extinction).
-    pub laser_attenuation_db_per_m: Option<NonNegative>,
+    pub laser_attenuation_db_per_m: Option<Attenuation>,
     /// Aerosol extinction k to a laser, 1/m (0–100): returns from the particles (§7.6).
     pub laser_extinction_per_m: Option<Extinction>,
     /// A robot may drive through.
@@ -263,7 +357,7 @@ pub struct SphereSpec {
     /// Centre; `[x, y]` rests it on the ground.
     pub center: Center,
     /// Radius, m.
-    pub radius: Positive,
+    pub radius: Size,
 }
 
 /// Box fields.
@@ -273,14 +367,14 @@ pub struct BoxSpec {
     /// Centre; `[x, y]` rests it on the ground.
     pub center: Center,
     /// Full size along its own axes, m.
-    pub size: [Positive; 3],
+    pub size: [Size; 3],
     /// Rotation about z, degrees.
     #[serde(default = "zero")]
-    pub yaw_deg: Finite,
+    pub yaw_deg: Yaw,
 }
 
-fn zero() -> Finite {
-    Finite(0.0)
+fn zero() -> Yaw {
+    Yaw(0.0)
 }
 
 /// Cylinder fields.
@@ -290,9 +384,9 @@ pub struct CylinderSpec {
     /// Centre of the axis; `[x, y]` stands it on the ground.
     pub center: Center,
     /// Radius, m.
-    pub radius: Positive,
+    pub radius: Size,
     /// Height, m.
-    pub height: Positive,
+    pub height: Size,
 }
 
 /// Wall fields.
@@ -300,11 +394,12 @@ pub struct CylinderSpec {
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
     /// Polyline of the wall's centre line.
+    #[serde(deserialize_with = "points")]
     pub points: Vec<Xy>,
     /// Thickness, m.
-    pub thickness: Positive,
+    pub thickness: Size,
     /// Height, m.
-    pub height: Positive,
+    pub height: Size,
 }
 
 /// Prism fields.
@@ -312,12 +407,13 @@ pub struct WallSpec {
 #[serde(deny_unknown_fields)]
 pub struct PrismSpec {
     /// Polygon in the xy plane.
+    #[serde(deserialize_with = "points")]
     pub polygon: Vec<Xy>,
     /// Bottom, m (default 0).
-    #[serde(default = "zero")]
-    pub z_min: Finite,
+    #[serde(default = "ground")]
+    pub z_min: Coord,
     /// Top, m.
-    pub z_max: Finite,
+    pub z_max: Coord,
 }
 
 /// `[[robot]]`.
@@ -344,11 +440,11 @@ pub struct RobotSpec {
 #[serde(deny_unknown_fields)]
 pub struct OdometrySpec {
     /// Relative standard deviation of each track speed per step.
-    pub speed_noise: Option<NonNegative>,
+    pub speed_noise: Option<SpeedNoise>,
     /// Constant turn-rate error, degrees/s.
-    pub yaw_drift_deg_s: Option<Finite>,
+    pub yaw_drift_deg_s: Option<YawRate>,
     /// Turn-rate white noise, degrees/s.
-    pub yaw_noise_deg_s: Option<NonNegative>,
+    pub yaw_noise_deg_s: Option<YawRate>,
 }
 
 fn default_vehicle() -> Spanned<String> {
@@ -360,12 +456,12 @@ fn default_vehicle() -> Spanned<String> {
 #[serde(deny_unknown_fields)]
 pub struct PlanarPose {
     /// m.
-    pub x: Finite,
+    pub x: Coord,
     /// m.
-    pub y: Finite,
+    pub y: Coord,
     /// Degrees.
     #[serde(default = "zero")]
-    pub yaw_deg: Finite,
+    pub yaw_deg: Yaw,
 }
 
 /// `{ x, y, z, yaw_deg }` relative to the robot.
@@ -373,31 +469,39 @@ pub struct PlanarPose {
 #[serde(deny_unknown_fields)]
 pub struct MountSpec {
     /// m forward.
-    #[serde(default = "zero")]
-    pub x: Finite,
+    #[serde(default = "no_offset")]
+    pub x: Mount,
     /// m left.
-    #[serde(default = "zero")]
-    pub y: Finite,
+    #[serde(default = "no_offset")]
+    pub y: Mount,
     /// m above the ground.
     #[serde(default = "default_mount_z")]
-    pub z: Finite,
+    pub z: Mount,
     /// Degrees.
     #[serde(default = "zero")]
-    pub yaw_deg: Finite,
+    pub yaw_deg: Yaw,
 }
 
 /// Height of a sensor on top of a P3AT (0.277 m body) on a small post.
 pub const DEFAULT_MOUNT_Z: f64 = 0.4;
 
-fn default_mount_z() -> Finite {
-    Finite(DEFAULT_MOUNT_Z)
+fn default_mount_z() -> Mount {
+    Mount(DEFAULT_MOUNT_Z)
+}
+
+fn no_offset() -> Mount {
+    Mount(0.0)
+}
+
+fn ground() -> Coord {
+    Coord(0.0)
 }
 
 impl Default for MountSpec {
     fn default() -> Self {
         Self {
-            x: zero(),
-            y: zero(),
+            x: no_offset(),
+            y: no_offset(),
             z: default_mount_z(),
             yaw_deg: zero(),
         }
@@ -416,36 +520,37 @@ pub struct SensorSpec {
     #[serde(default)]
     pub mount: MountSpec,
     /// Override: field of view, degrees.
-    pub fov_deg: Option<Positive>,
+    pub fov_deg: Option<Fov>,
     /// Override: angular step, degrees.
-    pub resolution_deg: Option<Positive>,
+    pub resolution_deg: Option<AngleStep>,
     /// Override, m.
-    pub range_min: Option<NonNegative>,
+    pub range_min: Option<Range>,
     /// Override, m.
-    pub range_max: Option<Positive>,
+    pub range_max: Option<Range>,
     /// Override, Hz.
-    pub rate_hz: Option<Positive>,
+    pub rate_hz: Option<Rate>,
     /// Override: scan planes, degrees.
-    pub elevations_deg: Option<Vec<Finite>>,
+    #[serde(default, deserialize_with = "elevations")]
+    pub elevations_deg: Option<Vec<Elevation>>,
     /// Override, m.
-    pub range_noise_std: Option<NonNegative>,
+    pub range_noise_std: Option<RangeNoise>,
     /// Override, fraction of range.
-    pub range_noise_rel: Option<NonNegative>,
+    pub range_noise_rel: Option<RangeNoiseRel>,
     /// Override, dB.
-    pub penetration_db: Option<Positive>,
+    pub penetration_db: Option<Penetration>,
     /// Override, m.
-    pub side_beam_offset: Option<NonNegative>,
+    pub side_beam_offset: Option<SideBeam>,
     /// Override: range bin of a binned radar, m.
-    pub range_bin: Option<Positive>,
+    pub range_bin: Option<RangeBin>,
     /// Return mode: thesis, first, strongest, last, all (DESIGN §7.3).
     #[serde(rename = "return")]
     pub return_mode: Option<crate::sensor::ReturnMode>,
     /// Echo range law: r2, r4, flat.
     pub range_law: Option<crate::sensor::RangeLaw>,
     /// dB, 1–200.
-    pub dynamic_range_db: Option<Finite>,
+    pub dynamic_range_db: Option<DynamicRange>,
     /// dB, −200–0.
-    pub detection_threshold_db: Option<Finite>,
+    pub detection_threshold_db: Option<Threshold>,
     /// Echoes per azimuth in `all` mode, 1–64.
     pub max_echoes: Option<u32>,
     /// Specular bounces, 0–8.
@@ -455,17 +560,17 @@ pub struct SensorSpec {
     /// Beam rays across elevation.
     pub beam_rays_el: Option<u32>,
     /// −3 dB beam width in azimuth, degrees.
-    pub beamwidth_az_deg: Option<NonNegative>,
+    pub beamwidth_az_deg: Option<Beamwidth>,
     /// −3 dB beam width in elevation, degrees.
-    pub beamwidth_el_deg: Option<NonNegative>,
+    pub beamwidth_el_deg: Option<Beamwidth>,
     /// Beam ray selection: uniform, incidence_weighted, nearest, strongest.
     pub selection: Option<crate::sensor::Selection>,
     /// Power image: chirp bandwidth, Hz.
-    pub bandwidth_hz: Option<Positive>,
+    pub bandwidth_hz: Option<Bandwidth>,
     /// Power image: mean noise power, dB.
-    pub noise_floor_db: Option<Finite>,
+    pub noise_floor_db: Option<Threshold>,
     /// Power image: dB above the noise floor shown as 255.
-    pub display_range_db: Option<Positive>,
+    pub display_range_db: Option<DynamicRange>,
     /// Power image: speckle on or off.
     pub speckle: Option<bool>,
 }

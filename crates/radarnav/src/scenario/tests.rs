@@ -123,14 +123,50 @@ fn out_of_range_value_points_at_the_value() {
     let e = err("[[object]]\nmaterial = \"wood\"\nsphere = { center = [0, 0], radius = -1.5 }\n");
     assert_eq!((e.line, e.column), (3, 38), "{e}");
     assert_eq!(e.key.as_deref(), Some("radius"));
-    assert!(
-        e.message.contains("> 0") && e.message.contains("-1.5"),
-        "{e}"
-    );
+    assert_eq!(e.message, "expected 0.001 to 10000 m, found -1.5", "{e}");
     assert_eq!(
         e.to_string(),
         format!("test.toml:3:38: `radius`: {}", e.message)
     );
+}
+
+#[test]
+fn every_extreme_value_of_the_hostile_tests_is_refused_with_its_range() {
+    let cases = [
+        ("[sim]\ndt = 1e-9\n", "dt", "0.0001 to 1 s"),
+        ("[sim]\nduration = 1e9\n", "duration", "0.001 to 1e6 s"),
+        (
+            "[[object]]\nmaterial = \"wood\"\nsphere = { center = [1e9, 0], radius = 1 }\n",
+            "center",
+            "-5000 to 5000 m",
+        ),
+        (
+            &format!(
+                "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"radar_thesis\"\nmount = {{ x = 1e308 }}\n"
+            ),
+            "x",
+            "-10 to 10 m",
+        ),
+        (
+            &format!(
+                "{ROBOT}[[robot.sensor]]\nname = \"s\"\npreset = \"radar_thesis\"\nrate_hz = 1e9\n"
+            ),
+            "rate_hz",
+            "0.001 to 1000 Hz",
+        ),
+        (
+            &format!("{ROBOT}[mission]\ntype = \"bug1\"\ngoal = [1, 1]\ncontroller_hz = 1e20\n"),
+            "controller_hz",
+            "0.01 to 1000 Hz",
+        ),
+    ];
+    for (src, key, range) in cases {
+        let e = err(src);
+        assert_eq!(e.key.as_deref(), Some(key), "{e}");
+        assert!(e.message.contains(range), "{e}");
+    }
+    let e = err("[[material]]\nname = \"concrete\"\nradar_attenuation_db_per_m = 1.0\n");
+    assert!(e.message.contains("built-in"), "{e}");
 }
 
 #[test]

@@ -272,6 +272,10 @@ pub fn preset(name: &str) -> Option<SensorConfig> {
 
 /// Most rays a single scan may have; larger configurations are rejected as mistakes.
 pub const MAX_RAYS: usize = 4_000_000;
+/// Most range bins of a power image (a Navtech CTS350-X has 3768).
+pub const MAX_IMAGE_BINS: f64 = 65_536.0;
+/// Most pixels of a power image.
+pub const MAX_IMAGE_PIXELS: f64 = 1e8;
 
 impl SensorConfig {
     /// Whether the field of view is a full circle (then the last ray does not repeat the first).
@@ -356,6 +360,17 @@ impl SensorConfig {
         self.signal.validate()?;
         if self.signal.image.is_some() && self.range_bin.is_none() {
             return Err("range_bin must be set for a sensor with a power image".into());
+        }
+        if let (Some(_), Some(bin)) = (&self.signal.image, self.range_bin) {
+            // The polar image is azimuths x bins bytes, with a few copies while it is drawn.
+            let bins = self.range_max / bin;
+            let pixels = bins * self.azimuth_count() as f64;
+            if bins > MAX_IMAGE_BINS || pixels > MAX_IMAGE_PIXELS {
+                return Err(format!(
+                    "range_bin gives a power image of {bins:.0} bins x {} azimuths; at most {MAX_IMAGE_BINS} bins and {MAX_IMAGE_PIXELS:e} pixels",
+                    self.azimuth_count()
+                ));
+            }
         }
         let rays = self.azimuth_count().saturating_mul(self.elevations.len());
         if rays > MAX_RAYS {

@@ -218,63 +218,43 @@ impl SignalConfig {
         rays
     }
 
-    /// Checks the ranges; the message names the key.
+    /// Checks the ranges (those of [`crate::limits`]); the message names the key.
     pub fn validate(&self) -> Result<(), String> {
-        let checks = [
-            (
-                (1.0..=200.0).contains(&self.dynamic_range_db),
-                "dynamic_range_db",
-                "must be from 1 to 200",
-            ),
-            (
-                (-200.0..=0.0).contains(&self.detection_threshold_db),
-                "detection_threshold_db",
-                "must be from -200 to 0",
-            ),
-            (
-                (1..=64).contains(&self.max_echoes),
-                "max_echoes",
-                "must be from 1 to 64",
-            ),
-            (self.max_bounces <= 8, "max_bounces", "must be from 0 to 8"),
-            (
-                self.beam_rays_az >= 1
-                    && self.beam_rays_el >= 1
-                    && self.beam_rays_az * self.beam_rays_el <= MAX_BEAM_RAYS,
-                "beam_rays",
-                "must be >= 1 per axis and at most 64 in all",
-            ),
-            (
-                (0.0..=0.5).contains(&self.beamwidth_az)
-                    && (0.0..=0.5).contains(&self.beamwidth_el),
-                "beamwidth_az_deg",
-                "and beamwidth_el_deg must be from 0 to 28.6 (0.5 rad)",
-            ),
-        ];
-        if let Some((_, key, msg)) = checks.iter().find(|c| !c.0) {
-            return Err(format!("{key} {msg}"));
+        use crate::limits::{
+            BANDWIDTH, BEAM_RAYS, BEAMWIDTH, BOUNCES, DYNAMIC_RANGE, ECHOES, Limit, THRESHOLD,
+        };
+        let check = |key: &str, limit: &Limit, v: f64| {
+            limit.check(v).map(|_| ()).map_err(|m| format!("{key} {m}"))
+        };
+        check("dynamic_range_db", &DYNAMIC_RANGE, self.dynamic_range_db)?;
+        check(
+            "detection_threshold_db",
+            &THRESHOLD,
+            self.detection_threshold_db,
+        )?;
+        check("max_echoes", &ECHOES, self.max_echoes as f64)?;
+        check("max_bounces", &BOUNCES, f64::from(self.max_bounces))?;
+        check("beam_rays", &BEAM_RAYS, self.beam_rays_az as f64)?;
+        check("beam_rays_el", &BEAM_RAYS, self.beam_rays_el as f64)?;
+        if self.beam_rays_az * self.beam_rays_el > MAX_BEAM_RAYS {
+            return Err(format!(
+                "beam_rays x beam_rays_el must be at most {MAX_BEAM_RAYS}"
+            ));
         }
+        check(
+            "beamwidth_az_deg",
+            &BEAMWIDTH,
+            self.beamwidth_az.to_degrees(),
+        )?;
+        check(
+            "beamwidth_el_deg",
+            &BEAMWIDTH,
+            self.beamwidth_el.to_degrees(),
+        )?;
         if let Some(im) = &self.image {
-            let checks = [
-                (
-                    (1e6..=1e11).contains(&im.bandwidth_hz),
-                    "bandwidth_hz",
-                    "must be from 1e6 to 1e11",
-                ),
-                (
-                    (-200.0..=0.0).contains(&im.noise_floor_db),
-                    "noise_floor_db",
-                    "must be from -200 to 0",
-                ),
-                (
-                    (1.0..=200.0).contains(&im.display_range_db),
-                    "display_range_db",
-                    "must be from 1 to 200",
-                ),
-            ];
-            if let Some((_, key, msg)) = checks.iter().find(|c| !c.0) {
-                return Err(format!("{key} {msg}"));
-            }
+            check("bandwidth_hz", &BANDWIDTH, im.bandwidth_hz)?;
+            check("noise_floor_db", &THRESHOLD, im.noise_floor_db)?;
+            check("display_range_db", &DYNAMIC_RANGE, im.display_range_db)?;
         }
         Ok(())
     }

@@ -245,6 +245,8 @@ pub struct Simulation<'a> {
     distance: f64,
     bumps: Vec<BumpEvent>,
     bump_count: usize,
+    /// Stopped from outside before its end ([`Simulation::run_until`]).
+    interrupted: bool,
 }
 
 /// Most scans traced ahead at one controller call (their memory is bounded by this).
@@ -320,6 +322,7 @@ impl<'a> Simulation<'a> {
             distance: 0.0,
             bumps: Vec::new(),
             bump_count: 0,
+            interrupted: false,
         })
     }
 
@@ -352,6 +355,30 @@ impl<'a> Simulation<'a> {
     pub fn run<O: Observer>(&mut self, observer: &mut O) -> Result<RunSummary, O::Error> {
         while self.step(observer)? {}
         Ok(self.summary())
+    }
+
+    /// Runs to the end, or until `stop` is set (a signal handler's flag): the step under way
+    /// is finished, and the summary says `interrupted`.
+    pub fn run_until<O: Observer>(
+        &mut self,
+        observer: &mut O,
+        stop: &std::sync::atomic::AtomicBool,
+    ) -> Result<RunSummary, O::Error> {
+        loop {
+            if stop.load(std::sync::atomic::Ordering::Relaxed) && !self.done() {
+                self.interrupted = true;
+                break;
+            }
+            if !self.step(observer)? {
+                break;
+            }
+        }
+        Ok(self.summary())
+    }
+
+    /// Whether [`Simulation::run_until`] was stopped.
+    pub fn interrupted(&self) -> bool {
+        self.interrupted
     }
 
     /// Takes one step; `false` once the run is over.

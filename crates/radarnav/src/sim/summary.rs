@@ -17,6 +17,8 @@ pub enum RunOutcome {
     NoPath,
     /// Time ran out first.
     Timeout,
+    /// Stopped by the user (Ctrl-C, SIGTERM) at the end of a step.
+    Interrupted,
 }
 
 impl RunOutcome {
@@ -27,6 +29,7 @@ impl RunOutcome {
             Self::Reached => "reached",
             Self::NoPath => "no_path",
             Self::Timeout => "timeout",
+            Self::Interrupted => "interrupted",
         }
     }
 }
@@ -114,7 +117,11 @@ impl RunSummary {
             dt: sim.settings.dt,
             duration: sim.time(),
             steps: sim.tick,
-            outcome: sim.ending.map_or(RunOutcome::Timeout, RunOutcome::from),
+            outcome: if sim.interrupted {
+                RunOutcome::Interrupted
+            } else {
+                sim.ending.map_or(RunOutcome::Timeout, RunOutcome::from)
+            },
             distance: sim.distance,
             odometry_distance: sim.odometry.distance,
             final_pose: truth,
