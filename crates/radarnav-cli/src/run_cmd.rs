@@ -251,7 +251,8 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<(Vec<Mapper>, f64)> {
     }
     let cells = a
         .budget
-        .check_maps(maps.iter().map(Mapper::name), region, config.resolution)?;
+        .check_maps(maps.iter().map(Mapper::name), region, config.resolution)
+        .with_context(|| format!("--map-resolution {}", config.resolution))?;
     Ok((maps, cells))
 }
 

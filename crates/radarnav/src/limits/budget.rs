@@ -58,7 +58,7 @@ impl Budget {
 pub enum BudgetError {
     /// A map would have too many cells.
     #[error(
-        "map `{map}` would have {cells:.3e} cells at {resolution} m over {width:.0} x {height:.0} m, more than the limit of {:.0e}; use a coarser --map-resolution",
+        "map `{map}` would have {cells:.3e} cells at {resolution} m over {width:.0} x {height:.0} m, more than the limit of {:.0e}",
         MAX_MAP_CELLS as f64
     )]
     Cells {
@@ -250,7 +250,7 @@ mod tests {
         assert!(b.check_maps(["radar"], region, 0.05).is_ok());
         let e = b.check_maps(["radar"], region, 1e-3).unwrap_err();
         assert!(matches!(e, BudgetError::Cells { .. }), "{e}");
-        assert!(e.to_string().contains("--map-resolution"), "{e}");
+        assert!(e.to_string().contains("more than the limit of 1e8"), "{e}");
         let small = Budget::from_gb(Some(0.01), None);
         let e = small
             .check_maps(["radar", "laser"], region, 0.05)

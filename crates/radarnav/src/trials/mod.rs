@@ -20,6 +20,7 @@
 
 pub mod geometry;
 
+use glam::DVec2;
 use rayon::prelude::*;
 use serde::Serialize;
 use thiserror::Error;
@@ -51,6 +52,9 @@ pub enum TrialError {
     /// The simulation.
     #[error("scenario `{0}`: {1}")]
     Sim(String, SimError),
+    /// The map is too large to rasterise for its expected outcome and bounds.
+    #[error("scenario `{0}`: {1}")]
+    Budget(String, crate::limits::budget::BudgetError),
 }
 
 /// One run to make on a map.
@@ -158,6 +162,17 @@ impl TrialMap {
             height: v.height,
             plane_z: sensors[class as usize].mount.z,
         });
+        // Two rasters of 5 cm cells over the world: refuse a world too large for them.
+        let g = &geometries[0];
+        let (lo, hi) = crate::render::world_region(&scenario.world);
+        let margin = DVec2::splat(standoff + 1.0);
+        let region = (
+            lo.min(g.start).min(g.goal) - margin,
+            hi.max(g.start).max(g.goal) + margin,
+        );
+        crate::limits::budget::Budget::default()
+            .check_maps(["radar", "laser"], region, geometry::CELL)
+            .map_err(|e| TrialError::Budget(scenario.name.clone(), e))?;
         let fields = [SensorClass::Radar, SensorClass::Laser].map(|class| {
             let g = &geometries[class as usize];
             geometry::Field::new(
@@ -541,6 +556,18 @@ pub fn failures(results: &[TrialResult]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_map_too_large_for_its_rasters_is_refused_before_they_are_made() {
+        let src = "[[object]]\nmaterial = \"concrete\"\nsphere = { center = [-4900, -4900], radius = 1 }\n\
+            [[object]]\nmaterial = \"concrete\"\nsphere = { center = [4900, 4900], radius = 1 }\n\
+            [[robot]]\nname = \"r\"\nstart = { x = 0.0, y = 0.0 }\n[[robot.sensor]]\nname = \"radar\"\npreset = \"radar_thesis\"\n\
+            [mission]\ntype = \"bug1\"\ngoal = [3, 0]\n";
+        let s = Scenario::from_toml(src, "big.toml", "big").unwrap();
+        let e = TrialMap::new(s).err().expect("refused");
+        assert!(matches!(e, TrialError::Budget(..)), "{e}");
+        assert!(e.to_string().contains("more than the limit of 1e8"), "{e}");
+    }
 
     #[test]
     fn a_failed_run_is_one_csv_row_and_one_failure_line() {
