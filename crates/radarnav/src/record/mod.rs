@@ -67,7 +67,7 @@ pub const GRID_PERIOD: f64 = 1.0;
 
 /// Most bytes of map messages per [`GRID_PERIOD`]: larger maps are logged every few periods,
 /// so a large map adds at most this much to the MCAP a simulated second.
-pub const GRID_BYTES_PER_PERIOD: usize = 4_000_000;
+pub const GRID_BYTES_PER_PERIOD: usize = 1_000_000;
 
 /// What to record.
 #[derive(Clone, Copy, Debug, PartialEq)]
