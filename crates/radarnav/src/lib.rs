@@ -6,21 +6,21 @@
 //! and the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`]
 //! (the P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`]
 //! (occupancy grids that tell seen-through from passable), [`compare`] (exploration
-//! experiments),
-//! [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs: CSV, scan logs,
-//! MCAP), [`files`] (outputs written whole or not at all), [`render`] (figures), [`demo`] (the thesis experiment), [`limits`] (the valid range of every input and the size
-//! estimates that bound a run), [`peers`] (the scene and rays
-//! of the benchmark against Embree and Bullet).
+//! experiments), [`trials`] (navigation trials), [`mission`] and [`nav`] (what drives the
+//! robot), [`record`] (run outputs: CSV, scan logs, MCAP), [`output`] (files written whole or
+//! not at all), [`limits`] (the valid range of every input and the size estimates that bound
+//! a run), [`render`] (figures), [`demo`] (the thesis experiment), [`peers`] (the scene and
+//! rays of the benchmark against Embree and Bullet).
 
 #![warn(missing_docs)]
 
 pub mod compare;
 pub mod demo;
-pub mod files;
 pub mod limits;
 pub mod map;
 pub mod mission;
 pub mod nav;
+pub mod output;
 pub mod peers;
 pub mod pose;
 pub mod record;

@@ -505,7 +505,7 @@ pub fn encode_png(pixmap: &Pixmap) -> Result<Vec<u8>, RenderError> {
 /// (an interrupted write leaves no half figure).
 pub fn save_png(pixmap: &Pixmap, path: &std::path::Path) -> Result<(), RenderError> {
     let bytes = encode_png(pixmap)?;
-    crate::files::write_whole(path, &bytes).map_err(|e| RenderError::Write {
+    crate::output::write_whole(path, &bytes).map_err(|e| RenderError::Write {
         path: path.display().to_string(),
         cause: Box::new(e),
     })

@@ -182,7 +182,7 @@ pub fn write_all(
 ) -> Result<Vec<PathBuf>, MapError> {
     let [png, pgm_path, yaml_path, npy_path] = files(dir, stem);
     save_png(&figure(grid, title, pixels, overlay)?, &png)?;
-    let whole = crate::files::write_whole;
+    let whole = crate::output::write_whole;
     whole(&pgm_path, &pgm(grid)).map_err(io(&pgm_path))?;
     let image = format!("{stem}.pgm");
     whole(&yaml_path, yaml(grid, &image).as_bytes()).map_err(io(&yaml_path))?;

@@ -216,7 +216,7 @@ impl Mapper {
         let twice = (1..names.len()).find(|&i| names[..i].contains(&names[i]));
         if let Some(n) = twice.map(|i| names[i]) {
             return Err(MapError::Config(format!(
-                "map `{spec}` names the sensor `{n}` twice"
+                "`{spec}` names the sensor `{n}` twice"
             )));
         }
         Self::new(&names.join("+"), robot, &names, config)

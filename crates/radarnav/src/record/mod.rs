@@ -20,8 +20,6 @@ pub mod scan_log;
 pub use scan_log::{ScanLogError, ScanLogHeader, ScanLogWriter, read_scan_log};
 
 use std::fs::File;
-
-use crate::files::Staged;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -30,6 +28,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::map::{MapError, MapScores, Mapper, export, score_maps};
+use crate::output::Staged;
 use crate::pose::Pose;
 use crate::render::{Figure, RenderError, save_png, world_region};
 use crate::scenario::{Robot, Scenario};
@@ -65,8 +64,9 @@ pub enum RecordError {
 /// Simulated seconds between two map messages in the MCAP recording, at least.
 pub const GRID_PERIOD: f64 = 1.0;
 
-/// Most bytes of map messages per [`GRID_PERIOD`]: larger maps are logged every few periods,
-/// so a large map adds at most this much to the MCAP a simulated second.
+/// Most bytes of map messages per [`GRID_PERIOD`] on average: larger maps are logged every
+/// few periods, so however large the maps, they add about this much to the MCAP a simulated
+/// second.
 pub const GRID_BYTES_PER_PERIOD: usize = 1_000_000;
 
 /// What to record.
@@ -237,9 +237,9 @@ fn create(staged: &mut Staged, path: &Path) -> Result<Out, RecordError> {
     staged.create(path).map(BufWriter::new).map_err(io_at(path))
 }
 
-/// Writes `path` whole or not at all (see [`crate::files::write_whole`]).
+/// Writes `path` whole or not at all (see [`crate::output::write_whole`]).
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
-    crate::files::write_whole(path, bytes).map_err(io_at(path))
+    crate::output::write_whole(path, bytes).map_err(io_at(path))
 }
 
 /// An MCAP error with its I/O cause tied to the MCAP file.
