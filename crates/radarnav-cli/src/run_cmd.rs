@@ -284,13 +284,13 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
             map_cells,
         },
     );
-    a.budget.check_output(
-        &format!(
-            "a run of {} s in steps of {} s",
-            settings.duration, settings.dt
-        ),
-        need,
-    )?;
+    let what = format!(
+        "a run of {} s in steps of {} s",
+        settings.duration, settings.dt
+    );
+    a.budget.check_output(&what, need)?;
+    a.budget
+        .check_memory(&what, budget::path_memory(&robot, settings.duration))?;
     if plan.mission == "explore" {
         track_coverage(
             &s.world,

@@ -168,6 +168,18 @@ impl Budget {
         Ok(total)
     }
 
+    /// Checks memory the run holds besides its maps ([`path_memory`]).
+    pub fn check_memory(&self, what: &str, need: f64) -> Result<(), BudgetError> {
+        if need > self.memory as f64 {
+            return Err(BudgetError::Memory {
+                what: what.to_owned(),
+                need,
+                limit: self.memory,
+            });
+        }
+        Ok(())
+    }
+
     /// Checks the recording's estimated size ([`run_output`]).
     pub fn check_output(&self, what: &str, need: f64) -> Result<(), BudgetError> {
         if need > self.output as f64 {
@@ -179,6 +191,12 @@ impl Budget {
         }
         Ok(())
     }
+}
+
+/// Bytes of the driven paths a run keeps for its figures and the MCAP path: the true and the
+/// odometry path, a pose (32 bytes) per centimetre or more, at the vehicle's top speed.
+pub fn path_memory(robot: &Robot, duration: f64) -> f64 {
+    2.0 * 32.0 * (duration * robot.vehicle.max_speed / 0.01 + 2.0)
 }
 
 /// What a recording holds, for [`run_output`].
@@ -254,6 +272,18 @@ mod tests {
         let small = Budget::from_gb(Some(0.01), None);
         let e = small
             .check_maps(["radar", "laser"], region, 0.05)
+            .unwrap_err();
+        assert!(e.to_string().contains("--max-memory"), "{e}");
+    }
+
+    #[test]
+    fn the_paths_of_a_very_long_run_are_refused_before_they_fill_memory() {
+        let s = Scenario::builtin("foliage-wall").unwrap();
+        let robot = s.robot(None).unwrap();
+        let b = Budget::default();
+        assert!(b.check_memory("paths", path_memory(robot, 3600.0)).is_ok());
+        let e = b
+            .check_memory("paths", path_memory(robot, 1e6))
             .unwrap_err();
         assert!(e.to_string().contains("--max-memory"), "{e}");
     }
