@@ -93,7 +93,7 @@ checked_f64! {
     TeleopTurn: limits::TELEOP_TURN;
 }
 
-/// A list of at most `N`-limit entries: longer lists are refused while they are read.
+/// A list whose length must be within `limit`: a longer one is refused where it is written.
 fn bounded_vec<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
     d: D,
     limit: &limits::Limit,

@@ -353,8 +353,7 @@ impl<'a> Simulation<'a> {
 
     /// Runs to the end.
     pub fn run<O: Observer>(&mut self, observer: &mut O) -> Result<RunSummary, O::Error> {
-        while self.step(observer)? {}
-        Ok(self.summary())
+        self.run_until(observer, &std::sync::atomic::AtomicBool::new(false))
     }
 
     /// Runs to the end, or until `stop` is set (a signal handler's flag): the step under way
