@@ -158,37 +158,39 @@ impl Budget {
             total += cells;
         }
         let need = total * MAP_BYTES_PER_CELL as f64;
-        if need > self.memory as f64 {
-            return Err(BudgetError::Memory {
-                what: format!("the maps ({total:.3e} cells)"),
-                need,
-                limit: self.memory,
-            });
-        }
+        self.check_memory(&format!("the maps ({total:.3e} cells)"), need)?;
         Ok(total)
     }
 
-    /// Checks memory the run holds besides its maps ([`path_memory`]).
+    /// Checks memory the run holds: its maps (see [`Budget::check_maps`]) or its paths
+    /// ([`path_memory`]).
     pub fn check_memory(&self, what: &str, need: f64) -> Result<(), BudgetError> {
-        if need > self.memory as f64 {
-            return Err(BudgetError::Memory {
-                what: what.to_owned(),
-                need,
-                limit: self.memory,
-            });
-        }
-        Ok(())
+        refuse_over(need, self.memory, |limit| BudgetError::Memory {
+            what: what.to_owned(),
+            need,
+            limit,
+        })
     }
 
     /// Checks the recording's estimated size ([`run_output`]).
     pub fn check_output(&self, what: &str, need: f64) -> Result<(), BudgetError> {
-        if need > self.output as f64 {
-            return Err(BudgetError::Output {
-                what: what.to_owned(),
-                need,
-                limit: self.output,
-            });
-        }
+        refuse_over(need, self.output, |limit| BudgetError::Output {
+            what: what.to_owned(),
+            need,
+            limit,
+        })
+    }
+}
+
+/// `error(limit)` when `need` is over `limit`.
+fn refuse_over(
+    need: f64,
+    limit: u64,
+    error: impl FnOnce(u64) -> BudgetError,
+) -> Result<(), BudgetError> {
+    if need > limit as f64 {
+        Err(error(limit))
+    } else {
         Ok(())
     }
 }
