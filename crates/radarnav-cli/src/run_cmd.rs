@@ -258,19 +258,19 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<(Vec<Mapper>, f64)> {
 
 /// The scenario's run settings with `--seed` and `--duration` (range-checked by the argument
 /// parser) applied.
-fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> Result<RunSettings> {
+fn settings(s: &Scenario, seed: Option<u64>, duration: Option<f64>) -> RunSettings {
     let base = RunSettings::of(s);
-    Ok(RunSettings {
+    RunSettings {
         seed: seed.unwrap_or(base.seed),
         duration: duration.unwrap_or(base.duration),
         ..base
-    })
+    }
 }
 
 /// `radarnav run`; `true` when a signal cut it short (its files are whole all the same).
 pub fn run(a: &RunArgs<'_>) -> Result<bool> {
     let s = a.scenario;
-    let settings = settings(s, a.seed, a.duration)?;
+    let settings = settings(s, a.seed, a.duration);
     let plan = plan(s, a.robot, a.teleop, a.base, false, settings.seed)?;
     let robot = with_sensors(plan.robot, a.add_sensors)?;
     let (mut maps, map_cells) = mappers(a, &robot)?;
@@ -387,7 +387,7 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
 /// with no recording; prints simulated seconds per wall second.
 pub fn bench_sim(s: &Scenario, seconds: f64, stop: &AtomicBool) -> Result<()> {
     let plan = plan(s, None, None, None, true, s.sim.seed)?;
-    let settings = settings(s, None, Some(seconds))?;
+    let settings = settings(s, None, Some(seconds));
     let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
     let (summary, wall) =
         drive(&mut sim, settings.dt, &mut NoObserver, stop).map_err(|e| match e {})?;

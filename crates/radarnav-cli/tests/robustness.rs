@@ -210,11 +210,11 @@ fn mutate(src: &str, rng: &mut ChaCha8Rng) -> Vec<u8> {
                 // A number scaled by a large power of ten.
                 let text = String::from_utf8_lossy(&bytes).into_owned();
                 let numbers = number_spans(&text);
-                if let Some(&(_, b)) = numbers.get(rng.random_range(0..numbers.len().max(1))) {
+                if let Some(&(a, b)) = numbers.get(rng.random_range(0..numbers.len().max(1)))
+                    && !text[a..b].contains(['e', 'E'])
+                {
                     let e = format!("e{}", rng.random_range(3..12));
-                    if !text[..b].contains('e') || !text[..b].ends_with(char::is_numeric) {
-                        bytes.splice(b..b, e.bytes());
-                    }
+                    bytes.splice(b..b, e.bytes());
                 }
             }
         }

@@ -32,11 +32,10 @@ pub fn parse_and_run(src: &str, steps: u64) -> bool {
         .iter()
         .filter_map(|m| Mapper::new(&m.name, robot, &[m.name.as_str()], config).ok())
         .collect();
-    let names: Vec<String> = maps.iter().map(|m| m.name().to_owned()).collect();
-    if Budget::default()
-        .check_maps(names.iter().map(String::as_str), region, config.resolution)
-        .is_err()
-    {
+    let fits = Budget::default()
+        .check_maps(maps.iter().map(Mapper::name), region, config.resolution)
+        .is_ok();
+    if !fits {
         maps.clear();
     }
     for m in &mut maps {

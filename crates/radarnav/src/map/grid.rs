@@ -449,12 +449,19 @@ impl Grid {
     /// a ray passes through gets one miss in `sensed`, and in `passable` too when
     /// `misses_clear_passable` (the sensor stops at the first thing in its way).
     pub fn insert(&mut self, beams: &[Beam], misses_clear_passable: bool) {
+        // Scans inside the limit (all of them in a closed world) are used as they are.
         let clipped: Vec<Beam>;
-        let beams = if self.limit.is_some() {
-            clipped = beams.iter().filter_map(|b| self.clip(b)).collect();
-            &clipped[..]
-        } else {
-            beams
+        let beams = match self.limit {
+            Some((lo, hi))
+                if !beams.iter().all(|b| {
+                    let inside = |p: DVec2| p.cmpge(lo).all() && p.cmple(hi).all();
+                    inside(b.from) && inside(b.to)
+                }) =>
+            {
+                clipped = beams.iter().filter_map(|b| self.clip(b)).collect();
+                &clipped[..]
+            }
+            _ => beams,
         };
         if beams.is_empty() {
             return;
