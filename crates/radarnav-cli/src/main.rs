@@ -92,7 +92,8 @@ enum Command {
         pixels: u32,
     },
     /// Drive a scenario's mission and record it: trajectory.csv, scans/*.rnscan,
-    /// summary.json, path.png and run.mcap (Foxglove/Lichtblick).
+    /// summary.json, path.png, run.mcap (Foxglove/Lichtblick) and, with --ros2-bag, a
+    /// rosbag2 directory ros2_bag/.
     Run {
         /// A built-in name or a path to a .toml file.
         scenario: String,
@@ -115,6 +116,9 @@ enum Command {
         /// Do not write run.mcap.
         #[arg(long)]
         no_mcap: bool,
+        /// Also write a rosbag2 (MCAP storage, CDR) to ros2_bag/, for `ros2 bag play`.
+        #[arg(long)]
+        ros2_bag: bool,
         /// Longer side of the map area of path.png and the map figures, pixels.
         #[arg(long, default_value_t = 900, value_parser = count::<u32>(&limits::PIXELS))]
         pixels: u32,
@@ -353,6 +357,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             duration,
             no_mcap,
+            ros2_bag,
             pixels,
             maps,
             no_maps,
@@ -378,6 +383,7 @@ fn run(cli: Cli) -> Result<()> {
                 seed,
                 duration,
                 mcap: !no_mcap,
+                ros2_bag,
                 pixels,
                 maps: (!no_maps).then_some(maps.as_slice()),
                 map_pose: &map_pose,

@@ -174,6 +174,8 @@ pub struct RunArgs<'a> {
     pub seed: Option<u64>,
     pub duration: Option<f64>,
     pub mcap: bool,
+    /// Write the rosbag2 recording.
+    pub ros2_bag: bool,
     pub pixels: u32,
     /// Map specs (`None`: no maps; empty: one per sensor).
     pub maps: Option<&'a [String]>,
@@ -280,6 +282,7 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
             dt: settings.dt,
             duration: settings.duration,
             mcap: a.mcap,
+            ros2_bag: a.ros2_bag,
             scans: true,
             map_cells,
         },
@@ -303,6 +306,7 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
     let mut sim = Simulation::new(&s.world, &robot, plan.controller, settings)?;
     let options = RecordOptions {
         mcap: a.mcap,
+        ros2_bag: a.ros2_bag,
         ..RecordOptions::default()
     };
     let mut rec = Recorder::create(a.out, &s.world, &robot, options)?

@@ -82,13 +82,13 @@ fn sigint_ends_a_run_at_a_step_with_every_file_whole() {
         let text = std::fs::read_to_string(f).expect("csv");
         assert!(text.ends_with('\n'), "{} ends mid-line", f.display());
     }
-    // One row per step taken, then the file ends.
+    // One row per step taken and one for the final state, then the file ends.
     let rows = std::fs::read_to_string(dir.join("trajectory.csv"))
         .expect("trajectory")
         .lines()
         .count()
         - 1;
-    assert_eq!(rows as u64, summary["steps"].as_u64().expect("steps"));
+    assert_eq!(rows as u64, summary["steps"].as_u64().expect("steps") + 1);
 
     let mcap = std::fs::read(dir.join("run.mcap")).expect("run.mcap");
     let mut messages = 0;
@@ -393,13 +393,17 @@ fn the_output_estimate_bounds_what_a_run_writes() {
     let config = radarnav::map::MapConfig::default();
     let region = map_region(&s.world, robot, config.max_free_range, config.max_range);
     let cells = 2.0 * cells_over(region, config.resolution);
-    for (duration, mcap) in [("5", true), ("20", false)] {
-        let dir = tmp(&format!("estimate-{duration}"));
+    for (duration, mcap, ros2_bag) in [("5", true, false), ("20", false, false), ("5", true, true)]
+    {
+        let dir = tmp(&format!("estimate-{duration}-{ros2_bag}"));
         let mut args = vec!["run", "foliage-wall", "--duration", duration, "--out"];
         let d = dir.to_string_lossy().into_owned();
         args.push(&d);
         if !mcap {
             args.push("--no-mcap");
+        }
+        if ros2_bag {
+            args.push("--ros2-bag");
         }
         let out = Command::new(BIN).args(&args).output().expect("run");
         assert!(
@@ -417,11 +421,14 @@ fn the_output_estimate_bounds_what_a_run_writes() {
                 dt: s.sim.dt,
                 duration: duration.parse().expect("number"),
                 mcap,
+                ros2_bag,
                 scans: true,
                 map_cells: cells,
             },
         );
-        eprintln!("{duration} s, mcap {mcap}: wrote {written} bytes, estimated {estimate:.0}");
+        eprintln!(
+            "{duration} s, mcap {mcap}, bag {ros2_bag}: wrote {written} bytes, estimated {estimate:.0}"
+        );
         assert!(estimate >= written as f64, "{estimate} < {written}");
         assert!(
             estimate < 40.0 * written as f64,

@@ -2,15 +2,15 @@
 //! through foliage, smoke and dust where a laser scanner cannot.
 //!
 //! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
-//! Modules: [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files
-//! and the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`]
-//! (the P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`]
-//! (occupancy grids that tell seen-through from passable), [`compare`] (exploration
-//! experiments), [`trials`] (navigation trials), [`mission`] and [`nav`] (what drives the
-//! robot), [`record`] (run outputs: CSV, scan logs, MCAP), [`output`] (files written whole or
-//! not at all), [`limits`] (the valid range of every input and the size estimates that bound
-//! a run), [`render`] (figures), [`demo`] (the thesis experiment), [`peers`] (the scene and
-//! rays of the benchmark against Embree and Bullet).
+//! Modules: [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files and
+//! the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`] (the
+//! P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`] (occupancy
+//! grids that tell seen-through from passable), [`compare`] (exploration experiments), [`trials`]
+//! (navigation trials), [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs:
+//! CSV, scan logs, MCAP), [`output`] (files written whole or not at all), [`stamp`] (the epoch of
+//! every output's time stamps), [`limits`] (the valid range of every input and the size estimates
+//! that bound a run), [`render`] (figures), [`demo`] (the thesis experiment), [`peers`] (the scene
+//! and rays of the benchmark against Embree and Bullet).
 
 #![warn(missing_docs)]
 
@@ -28,6 +28,7 @@ pub mod render;
 pub mod scenario;
 pub mod sensor;
 pub mod sim;
+pub mod stamp;
 pub mod trials;
 pub mod vehicle;
 pub mod world;

@@ -42,6 +42,17 @@ impl Pose {
             yaw: wrap_angle(self.yaw + child.yaw),
         }
     }
+
+    /// The inverse transform: `self.compose(&self.inverse())` is the identity.
+    pub fn inverse(&self) -> Pose {
+        let (s, c) = self.yaw.sin_cos();
+        Pose {
+            x: -(c * self.x + s * self.y),
+            y: -(-s * self.x + c * self.y),
+            z: -self.z,
+            yaw: wrap_angle(-self.yaw),
+        }
+    }
 }
 
 /// Wraps an angle into (-π, π].
@@ -66,6 +77,15 @@ mod tests {
         let p = robot.compose(&mount);
         assert!((p.x - 1.0).abs() < 1e-12 && (p.y - 2.5).abs() < 1e-12);
         assert!((p.z - 0.4).abs() < 1e-12 && (p.yaw - FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_pose_composed_with_its_inverse_is_the_identity() {
+        let p = Pose::new(1.5, -2.0, 0.3, 2.9);
+        for q in [p.compose(&p.inverse()), p.inverse().compose(&p)] {
+            assert!(q.x.abs() < 1e-12 && q.y.abs() < 1e-12 && q.z.abs() < 1e-12);
+            assert!(q.yaw.abs() < 1e-12);
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@ use radarnav::Scenario;
 use radarnav::map::{MapConfig, Mapper};
 use radarnav::record::{RecordOptions, Recorder, files, read_scan_log};
 use radarnav::sim::{RunOutcome, RunSettings, RunSummary, Simulation};
+use radarnav::stamp::EPOCH_NS;
 
 fn tmp(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
@@ -19,6 +20,11 @@ fn tmp(name: &str) -> PathBuf {
 /// Runs the built-in foliage-wall mission for `duration` seconds into `dir`, building a map
 /// from each of `maps`.
 fn record(dir: &Path, duration: f64, maps: &[&str]) -> RunSummary {
+    record_with(dir, duration, maps, RecordOptions::default())
+}
+
+/// [`record`] with these options.
+fn record_with(dir: &Path, duration: f64, maps: &[&str], options: RecordOptions) -> RunSummary {
     let s = Scenario::builtin("foliage-wall").unwrap();
     let robot = &s.robots[0];
     let controller = s.mission.as_ref().unwrap().controller(0).unwrap();
@@ -31,7 +37,7 @@ fn record(dir: &Path, duration: f64, maps: &[&str]) -> RunSummary {
         .iter()
         .map(|m| Mapper::from_spec(m, robot, MapConfig::default()).unwrap())
         .collect();
-    let mut rec = Recorder::create(dir, &s.world, robot, RecordOptions::default())
+    let mut rec = Recorder::create(dir, &s.world, robot, options)
         .unwrap()
         .with_maps(maps)
         .unwrap();
@@ -84,10 +90,12 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     };
     expect("/world", "foxglove.SceneUpdate", 1);
     expect("/p3at/body", "foxglove.SceneUpdate", 1);
-    // 60 steps of the robot plus the two sensor mounts at t = 0.
-    expect("/tf", "foxglove.FrameTransform", 60 + 2);
-    expect("/p3at/pose", "foxglove.PoseInFrame", 60);
-    expect("/p3at/odometry", "foxglove.PoseInFrame", 60);
+    // map → odom and odom → base_link at 60 steps, at the 60 laser scans between steps (40 Hz
+    // against 20 Hz steps) and at the end; the two sensor mounts once.
+    expect("/tf", "foxglove.FrameTransform", 2 * (60 + 60 + 1));
+    expect("/tf_static", "foxglove.FrameTransform", 2);
+    expect("/p3at/pose", "foxglove.PoseInFrame", 61);
+    expect("/p3at/odometry", "foxglove.PoseInFrame", 61);
     // 3 s at 4 Hz and at 40 Hz.
     expect("/p3at/scan/radar", "foxglove.LaserScan", 12);
     expect("/p3at/scan/laser", "foxglove.LaserScan", 120);
@@ -95,10 +103,10 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     // Maps at t = 0, 1 and 2 s, and at the end.
     expect("/p3at/map/radar", "foxglove.Grid", 4);
     expect("/p3at/map/laser", "foxglove.Grid", 4);
-    assert_eq!(counts.len(), 10);
+    assert_eq!(counts.len(), 11);
     let (t, grid) = grid.unwrap();
-    assert_eq!(t, 3_000_000_000);
-    assert_eq!(grid.frame_id, "world");
+    assert_eq!(t, EPOCH_NS + 3_000_000_000);
+    assert_eq!(grid.frame_id, "map");
     assert_eq!(grid.cell_stride, 5);
     assert_eq!(grid.row_stride, 5 * grid.column_count);
     assert_eq!(grid.data.len() % grid.row_stride as usize, 0);
@@ -114,7 +122,8 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     assert!(classes.is_superset(&[1, 2, 3].into()), "{classes:?}");
     // The last laser scan: 1081 ranges over 270°, stamped 119/40 s.
     let (t, scan) = last_scan.unwrap();
-    assert_eq!(t, 2_975_000_000);
+    assert_eq!(t, EPOCH_NS + 2_975_000_000);
+    assert_eq!(scan.frame_id, "laser");
     assert_eq!(scan.ranges.len(), 1081);
     assert!((scan.end_angle - scan.start_angle - 270f64.to_radians()).abs() < 1e-9);
     assert!(scan.ranges.iter().any(|r| r.is_finite()));
@@ -126,6 +135,68 @@ fn mcap_reads_back_with_the_expected_channels_and_counts() {
     let world = world.unwrap();
     assert_eq!(world.entities.len(), 13);
     assert_eq!(world.entities[1].spheres.len(), 1);
+}
+
+#[test]
+fn the_ros2_bag_has_ros2_schemas_cdr_messages_and_its_metadata() {
+    use radarnav::record::ros2::{BAG_DIR, BAG_FILE, METADATA};
+    let dir = tmp("record-bag");
+    let options = RecordOptions {
+        mcap: false,
+        ros2_bag: true,
+        ..RecordOptions::default()
+    };
+    let summary = record_with(&dir, 2.0, &["radar"], options);
+    assert!(!dir.join(files::MCAP).exists());
+    let bag = dir.join(BAG_DIR);
+    let bytes = std::fs::read(bag.join(BAG_FILE)).unwrap();
+    // The header record follows the magic: opcode 1, length, then the profile string.
+    assert_eq!(bytes[8], 1);
+    assert_eq!(&bytes[17..25], b"\x04\0\0\0ros2");
+    let mut counts: BTreeMap<String, u64> = BTreeMap::new();
+    let mut first_clock = None;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let schema = m.channel.schema.as_ref().unwrap();
+        assert_eq!(schema.encoding, "ros2msg");
+        assert_eq!(m.channel.message_encoding, "cdr");
+        // CDR, little-endian.
+        assert_eq!(&m.data[..4], &[0, 1, 0, 0]);
+        let qos = &m.channel.metadata["offered_qos_profiles"];
+        assert_eq!(
+            qos.contains("transient_local"),
+            m.channel.topic == "/tf_static"
+        );
+        if m.channel.topic == "/clock" && first_clock.is_none() {
+            first_clock = Some(m.data.to_vec());
+        }
+        *counts.entry(m.channel.topic.clone()).or_default() += 1;
+    }
+    // The first clock: 1 700 000 000 s, 0 ns.
+    let mut clock = vec![0, 1, 0, 0];
+    clock.extend(1_700_000_000i32.to_le_bytes());
+    clock.extend(0u32.to_le_bytes());
+    assert_eq!(first_clock, Some(clock));
+    assert_eq!(counts["/clock"], summary.steps + 1);
+    assert_eq!(counts["/odom"], summary.steps + 1);
+    assert_eq!(counts["/scan/radar"], 8);
+    assert_eq!(counts["/scan/laser"], 80);
+    assert_eq!(counts["/tf_static"], 1);
+    // metadata.yaml (JSON, which YAML parsers read) agrees with the MCAP.
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(bag.join(METADATA)).unwrap()).unwrap();
+    let info = &meta["rosbag2_bagfile_information"];
+    assert_eq!(info["version"], 9);
+    assert_eq!(info["storage_identifier"], "mcap");
+    assert_eq!(info["relative_file_paths"][0], BAG_FILE);
+    assert_eq!(info["message_count"], counts.values().sum::<u64>());
+    assert_eq!(info["starting_time"]["nanoseconds_since_epoch"], EPOCH_NS);
+    let topics = info["topics_with_message_count"].as_array().unwrap();
+    assert_eq!(topics.len(), counts.len());
+    for t in topics {
+        let name = t["topic_metadata"]["name"].as_str().unwrap();
+        assert_eq!(t["message_count"], counts[name], "{name}");
+    }
 }
 
 #[test]
@@ -157,8 +228,14 @@ fn scan_logs_trajectory_and_summary_read_back() {
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
         .collect();
-    assert_eq!(rows.len(), 40);
+    // 40 steps and the final state, which is the summary's.
+    assert_eq!(rows.len(), 41);
     assert!(rows.iter().all(|r| r.len() == 12 && r[11] == 0.0));
+    let end = &rows[40];
+    assert_eq!(end[0], summary.duration);
+    assert!((end[1] - summary.final_pose.x).abs() < 1e-5);
+    assert!((end[4] - summary.final_odometry.x).abs() < 1e-5);
+    assert_eq!(&end[7..], &[0.0; 5]);
     // left/right are the twist's track speeds.
     for r in &rows {
         let half = r[8].to_radians() * 0.36 / 2.0;
@@ -283,7 +360,7 @@ fn imaging_and_multi_echo_radars_are_recorded() {
             "/p3at/radar/navtech_cts350x/image" => {
                 let img = CompressedImage::decode(m.data.as_ref()).unwrap();
                 assert_eq!(img.format, "png");
-                assert_eq!(img.frame_id, "p3at/navtech_cts350x");
+                assert_eq!(img.frame_id, "navtech_cts350x");
                 assert_eq!(
                     img.data.as_ref(),
                     std::fs::read(idir.join(format!("{}.png", stamps[images])))

@@ -210,20 +210,25 @@ pub struct Recording {
     pub duration: f64,
     /// `run.mcap` is written.
     pub mcap: bool,
+    /// The rosbag2 recording is written.
+    pub ros2_bag: bool,
     /// The scan logs are written.
     pub scans: bool,
     /// Cells of all maps together (logged to the MCAP every [`crate::record::GRID_PERIOD`]).
     pub map_cells: f64,
 }
 
-/// Bytes a recording of `robot` writes at most: per step a trajectory row and three MCAP
-/// messages; per scan its scan-log record and its MCAP scan (with echoes in `all` mode);
-/// per rotation of an imaging radar its PNG; the maps' MCAP messages and files.
+/// Bytes a recording of `robot` writes at most: per step a trajectory row, four MCAP
+/// messages and the bag's clock, transforms and odometry; per scan its scan-log record and
+/// its MCAP and bag messages (with echoes in `all` mode); per rotation of an imaging radar
+/// its PNG and the bag's raw image; the maps' MCAP and bag messages and files.
 pub fn run_output(robot: &Robot, r: &Recording) -> f64 {
-    const STEP_BYTES: f64 = 120.0 + 3.0 * 160.0;
-    let steps = (r.duration / r.dt).ceil() + 1.0;
+    const STEP_BYTES: f64 = 4.0 * 160.0;
+    const BAG_STEP_BYTES: f64 = 1100.0;
+    let steps = (r.duration / r.dt).ceil() + 2.0;
     let mcap = f64::from(u8::from(r.mcap));
-    let mut bytes = steps * if r.mcap { STEP_BYTES } else { 120.0 };
+    let bag = f64::from(u8::from(r.ros2_bag));
+    let mut bytes = steps * (120.0 + mcap * STEP_BYTES + bag * BAG_STEP_BYTES);
     for s in &robot.sensors {
         let c = &s.config;
         let rays = (c.azimuth_count() * c.elevations.len()) as f64;
@@ -238,13 +243,14 @@ pub fn run_output(robot: &Robot, r: &Recording) -> f64 {
         } else {
             0.0
         };
-        let per_scan =
-            log + mcap * (200.0 + c.azimuth_count() as f64 * 18.0 + rays * 18.0 * echoes);
+        let per_scan = log
+            + mcap * (500.0 + c.azimuth_count() as f64 * 18.0 + rays * 18.0 * echoes)
+            + bag * (600.0 + c.azimuth_count() as f64 * 4.0 + rays * 18.0 * echoes);
         bytes += scans * per_scan;
         if let (Some(_), Some(bin)) = (&c.signal.image, c.range_bin) {
-            // One PNG (raw size bound) per rotation, in the files and the MCAP.
+            // One PNG (raw size bound) per rotation, in the files and the MCAP; raw in the bag.
             let image = c.azimuth_count() as f64 * (c.range_max / bin + 11.0);
-            bytes += (scans / c.azimuth_count().max(1) as f64).ceil() * image * (1.0 + mcap);
+            bytes += (scans / c.azimuth_count().max(1) as f64).ceil() * image * (1.0 + mcap + bag);
         }
     }
     // MCAP: maps of 5 bytes a cell, at most GRID_BYTES_PER_PERIOD a period (or one whole map
@@ -253,7 +259,8 @@ pub fn run_output(robot: &Robot, r: &Recording) -> f64 {
     let grid_messages = (5.0 * r.map_cells + crate::record::GRID_BYTES_PER_PERIOD as f64)
         * periods.min(2.0)
         + crate::record::GRID_BYTES_PER_PERIOD as f64 * periods;
-    bytes + mcap * grid_messages + 10.0 * r.map_cells
+    // The bag's maps are whole, a byte a cell: the Foxglove messages' bound holds for them.
+    bytes + (mcap + bag) * grid_messages + 10.0 * r.map_cells
 }
 
 #[cfg(test)]
@@ -298,6 +305,7 @@ mod tests {
             dt,
             duration,
             mcap: true,
+            ros2_bag: false,
             scans: true,
             map_cells: 0.0,
         };

@@ -1,27 +1,30 @@
 //! An MCAP recording with Foxglove's protobuf schemas, so a run opens in Foxglove or Lichtblick.
 //!
-//! Channels (times are simulation time from 0):
+//! Frames are REP-105's, as in the rosbag2 recording (see [`super::frames`]): `map → odom →
+//! base_link → <sensor>`. Times are UNIX times from [`crate::stamp::EPOCH_NS`] at simulation
+//! time 0. Channels:
 //! * `/world` (`foxglove.SceneUpdate`, once at t = 0): every object, coloured by material,
-//!   see-through for penetrable ones.
-//! * `/tf` (`foxglove.FrameTransform`): `world → <robot>/base_link` every step (true pose),
-//!   `<robot>/base_link → <robot>/<sensor>` once at t = 0 (the mounts).
+//!   see-through for penetrable ones, in `map`.
+//! * `/tf` (`foxglove.FrameTransform`): `map → odom` (the odometry's drift) and `odom →
+//!   base_link` (the odometry) every step, at every scan taken between steps and at the end.
+//! * `/tf_static` (`foxglove.FrameTransform`, at t = 0): `base_link → <sensor>`, the mounts.
 //! * `/<robot>/body` (`foxglove.SceneUpdate`, once): the vehicle's box, locked to `base_link`.
-//! * `/<robot>/pose` and `/<robot>/odometry` (`foxglove.PoseInFrame`, frame `world`, every step).
-//! * `/<robot>/scan/<sensor>` (`foxglove.LaserScan`, every scan): frame `world`, with the
-//!   sensor's exact pose at the scan's time (scans inside a step are taken on the arc);
-//!   intensities code how each ray ended: 0 no return, 1 budget ran out, 2 solid. A sensor with
-//!   several planes logs the one closest to horizontal.
+//! * `/<robot>/pose` (`foxglove.PoseInFrame`, frame `map`) and `/<robot>/odometry` (frame
+//!   `odom`): the true pose and the odometry, every step and at the end.
+//! * `/<robot>/scan/<sensor>` (`foxglove.LaserScan`, every scan): in the sensor's frame (scans
+//!   inside a step are taken on the arc: `/tf` has their time). A sensor with several planes
+//!   logs the one closest to horizontal. No intensities (the echoes carry powers).
 //! * `/<robot>/echoes/<sensor>` (`foxglove.PointCloud`, every scan of a sensor with a
-//!   multi-echo return mode): every echo of the scan in the frame `world`, fields `x`, `y`,
+//!   multi-echo return mode): every echo of the scan in the sensor's frame, fields `x`, `y`,
 //!   `z`, `power_db` (float32), `kind` (0 surface, 1 volume) and `bounces` (uint8).
 //! * `/<robot>/radar/<sensor>/image` (`foxglove.CompressedImage`, PNG, every rotation of an
 //!   imaging radar, stamped at its first row): the polar power image in the Oxford layout,
-//!   frame `<robot>/<sensor>`.
+//!   in the sensor's frame.
 //! * `/<robot>/radar/<sensor>/points` (`foxglove.PointCloud`, with each image): its
-//!   k-strongest detections in the frame `world` (each from the pose of its own row), fields
+//!   k-strongest detections in `map` (each from the pose of its own row), fields
 //!   `x`, `y`, `z` (float32) and `power` (uint8, the image's value).
-//! * `/<robot>/path` (`foxglove.PosesInFrame`, once at the end): the driven path.
-//! * `/<robot>/map/<name>` (`foxglove.Grid`, frame `world`, every [`super::GRID_PERIOD`] s,
+//! * `/<robot>/path` (`foxglove.PosesInFrame`, once at the end): the driven path in `map`.
+//! * `/<robot>/map/<name>` (`foxglove.Grid`, frame `map`, every [`super::GRID_PERIOD`] s,
 //!   or every few periods while the maps exceed [`super::GRID_BYTES_PER_PERIOD`], and at the
 //!   end): each occupancy map, cropped to its known cells. Fields `red`, `green`,
 //!   `blue`, `alpha` (the thesis' palette; unknown cells half transparent) and `class`
@@ -39,20 +42,24 @@ use foxglove::schemas::{
 };
 
 use super::RecordError;
+use super::frames::{self, BASE_LINK, MAP, ODOM, PointFieldSpec};
 use super::radar_images::SweepImage;
 use crate::map::CellClass;
 use crate::map::Grid;
 use crate::map::export::known_extent;
 use crate::pose::Pose;
 use crate::scenario::Robot;
-use crate::sensor::{EchoKind, HitKind, ReturnMode, Scan};
-use crate::sim::Step;
+use crate::sensor::ReturnMode;
+use crate::sim::{ScanEvent, Step};
+use crate::stamp::unix_ns;
 use crate::world::{Shape, World};
 
 /// Topic of the static world.
 pub const WORLD_TOPIC: &str = "/world";
 /// Topic of the transforms.
 pub const TF_TOPIC: &str = "/tf";
+/// Topic of the fixed transforms.
+pub const TF_STATIC_TOPIC: &str = "/tf_static";
 
 /// Writes one run to an MCAP file.
 pub struct McapLog<W: Write + Seek> {
@@ -61,28 +68,28 @@ pub struct McapLog<W: Write + Seek> {
     tf: u16,
     pose: u16,
     odometry: u16,
+    /// Per sensor, the scan channel and the plane it carries.
     scans: Vec<(u16, usize)>,
     /// Per sensor, the echo channel of a multi-echo sensor.
     echoes: Vec<Option<u16>>,
     /// Per sensor, the image and detection channels of an imaging radar.
     radar: Vec<Option<(u16, u16)>>,
-    sensor_names: Vec<String>,
+    sensor_frames: Vec<String>,
     path: u16,
+    /// Stamp of the last `/tf`, so that no stamp is logged twice.
+    last_tf: Option<u64>,
     maps: Vec<u16>,
     sequence: u32,
     buf: Vec<u8>,
 }
 
-fn ns(t: f64) -> u64 {
-    (t.max(0.0) * 1e9).round() as u64
+fn stamp_ns(ns: u64) -> Option<Timestamp> {
+    let (sec, nsec) = crate::stamp::split(ns);
+    Some(Timestamp::new(u32::try_from(sec).unwrap_or(u32::MAX), nsec))
 }
 
 fn stamp(t: f64) -> Option<Timestamp> {
-    let n = ns(t);
-    Some(Timestamp::new(
-        u32::try_from(n / 1_000_000_000).unwrap_or(u32::MAX),
-        (n % 1_000_000_000) as u32,
-    ))
+    stamp_ns(unix_ns(t))
 }
 
 fn vec3(x: f64, y: f64, z: f64) -> Option<Vector3> {
@@ -97,6 +104,16 @@ fn yaw_quat(yaw: f64) -> Option<Quaternion> {
         z: s,
         w: c,
     })
+}
+
+fn transform(ns: u64, parent: &str, child: &str, pose: &Pose) -> FrameTransform {
+    FrameTransform {
+        timestamp: stamp_ns(ns),
+        parent_frame_id: parent.into(),
+        child_frame_id: child.into(),
+        translation: vec3(pose.x, pose.y, pose.z),
+        rotation: yaw_quat(pose.yaw),
+    }
 }
 
 fn fg_pose(p: &Pose) -> FgPose {
@@ -115,9 +132,6 @@ fn color(rgb: [u8; 3], a: f64) -> Option<Color> {
     })
 }
 
-/// Bytes per point of the echo clouds.
-const ECHO_STRIDE: u32 = 18;
-
 fn field(name: &str, offset: u32, kind: NumericType) -> PackedElementField {
     PackedElementField {
         name: name.into(),
@@ -126,7 +140,23 @@ fn field(name: &str, offset: u32, kind: NumericType) -> PackedElementField {
     }
 }
 
-fn mcap_err(e: mcap::McapError) -> RecordError {
+fn fields(spec: &[PointFieldSpec]) -> Vec<PackedElementField> {
+    spec.iter()
+        .map(|&(name, offset, kind)| {
+            field(
+                name,
+                offset,
+                match kind {
+                    frames::FieldType::F32 => NumericType::Float32,
+                    frames::FieldType::U8 => NumericType::Uint8,
+                },
+            )
+        })
+        .collect()
+}
+
+/// An MCAP error as a recording error (the I/O cause kept for the recorder to name the file).
+pub(crate) fn mcap_err(e: mcap::McapError) -> RecordError {
     match e {
         // Keep the OS error (disk full, permission): the recorder names the file.
         mcap::McapError::Io(io) => RecordError::McapIo(io),
@@ -134,7 +164,8 @@ fn mcap_err(e: mcap::McapError) -> RecordError {
     }
 }
 
-fn mcap_msg(m: &str) -> RecordError {
+/// A recording error of the MCAP writer with message `m`.
+pub(crate) fn mcap_msg(m: &str) -> RecordError {
     RecordError::Mcap(m.to_owned())
 }
 
@@ -157,6 +188,7 @@ impl<W: Write + Seek> McapLog<W> {
         };
         let world_ch = channel(WORLD_TOPIC, SceneUpdate::get_schema())?;
         let tf = channel(TF_TOPIC, FrameTransform::get_schema())?;
+        let tf_static = channel(TF_STATIC_TOPIC, FrameTransform::get_schema())?;
         let body = channel(&format!("/{name}/body"), SceneUpdate::get_schema())?;
         let pose = channel(&format!("/{name}/pose"), PoseInFrame::get_schema())?;
         let odometry = channel(&format!("/{name}/odometry"), PoseInFrame::get_schema())?;
@@ -183,14 +215,7 @@ impl<W: Write + Seek> McapLog<W> {
             } else {
                 None
             });
-            let plane = s
-                .config
-                .elevations
-                .iter()
-                .enumerate()
-                .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-                .map_or(0, |(i, _)| i);
-            scans.push((id, plane));
+            scans.push((id, frames::horizontal_plane(&s.config.elevations)));
         }
         let path = channel(&format!("/{name}/path"), PosesInFrame::get_schema())?;
         let mut log = Self {
@@ -202,24 +227,22 @@ impl<W: Write + Seek> McapLog<W> {
             scans,
             echoes,
             radar,
-            sensor_names: robot.sensors.iter().map(|s| s.name.clone()).collect(),
+            sensor_frames: robot
+                .sensors
+                .iter()
+                .map(|s| frames::sensor_frame(&s.name))
+                .collect(),
             path,
+            last_tf: None,
             maps: Vec::new(),
             sequence: 0,
             buf: Vec::new(),
         };
         log.write(world_ch, 0.0, &world_scene(world))?;
         log.write(body, 0.0, &body_scene(robot))?;
-        for s in &robot.sensors {
-            let m = &s.mount;
-            let msg = FrameTransform {
-                timestamp: stamp(0.0),
-                parent_frame_id: format!("{}/base_link", log.robot),
-                child_frame_id: format!("{}/{}", log.robot, s.name),
-                translation: vec3(m.x, m.y, m.z),
-                rotation: yaw_quat(m.yaw),
-            };
-            log.write(tf, 0.0, &msg)?;
+        for (s, frame) in robot.sensors.iter().zip(log.sensor_frames.clone()) {
+            let msg = transform(unix_ns(0.0), BASE_LINK, &frame, &s.mount);
+            log.write(tf_static, 0.0, &msg)?;
         }
         Ok(log)
     }
@@ -232,30 +255,37 @@ impl<W: Write + Seek> McapLog<W> {
         let header = mcap::records::MessageHeader {
             channel_id: channel,
             sequence: self.sequence,
-            log_time: ns(t),
-            publish_time: ns(t),
+            log_time: unix_ns(t),
+            publish_time: unix_ns(t),
         };
         self.out
             .write_to_known_channel(&header, &self.buf)
             .map_err(mcap_err)
     }
 
-    /// Logs a step: the transform, the true pose and the odometry.
+    /// `/tf` at time `t` from the true and the odometry pose, unless `/tf` has that stamp.
+    fn tf(&mut self, t: f64, truth: &Pose, odometry: &Pose) -> Result<(), RecordError> {
+        let ns = unix_ns(t);
+        if self.last_tf.is_some_and(|last| last >= ns) {
+            return Ok(());
+        }
+        self.last_tf = Some(ns);
+        let drift = frames::map_to_odom(truth, odometry);
+        self.write(self.tf, t, &transform(ns, MAP, ODOM, &drift))?;
+        self.write(self.tf, t, &transform(ns, ODOM, BASE_LINK, odometry))
+    }
+
+    /// Logs a step (or the final state): the transforms, the true pose and the odometry.
     pub fn step(&mut self, step: &Step) -> Result<(), RecordError> {
         let t = step.time;
-        let p = step.truth;
-        let tf = FrameTransform {
-            timestamp: stamp(t),
-            parent_frame_id: "world".into(),
-            child_frame_id: format!("{}/base_link", self.robot),
-            translation: vec3(p.x, p.y, p.z),
-            rotation: yaw_quat(p.yaw),
-        };
-        self.write(self.tf, t, &tf)?;
-        for (ch, pose) in [(self.pose, &step.truth), (self.odometry, &step.odometry)] {
+        self.tf(t, &step.truth, &step.odometry)?;
+        for (ch, frame, pose) in [
+            (self.pose, MAP, &step.truth),
+            (self.odometry, ODOM, &step.odometry),
+        ] {
             let msg = PoseInFrame {
                 timestamp: stamp(t),
-                frame_id: "world".into(),
+                frame_id: frame.into(),
                 pose: Some(fg_pose(pose)),
             };
             self.write(ch, t, &msg)?;
@@ -263,62 +293,39 @@ impl<W: Write + Seek> McapLog<W> {
         Ok(())
     }
 
-    /// Logs a scan of sensor `sensor`.
-    pub fn scan(&mut self, sensor: usize, scan: &Scan) -> Result<(), RecordError> {
+    /// Logs a scan: its transforms (if taken between steps), the scan and its echoes.
+    pub fn scan(&mut self, event: &ScanEvent<'_>) -> Result<(), RecordError> {
+        let (sensor, scan) = (event.sensor, event.scan);
+        self.tf(scan.stamp, &event.truth, &event.odometry)?;
         let (ch, plane) = self.scans[sensor];
         let rows = plane * scan.azimuths..(plane + 1) * scan.azimuths;
+        let frame = self.sensor_frames[sensor].clone();
         let msg = LaserScan {
             timestamp: stamp(scan.stamp),
-            frame_id: "world".into(),
-            pose: Some(fg_pose(&scan.pose)),
+            frame_id: frame.clone(),
+            pose: Some(fg_pose(&Pose::default())),
             start_angle: scan.angle_min,
             end_angle: scan.angle_min + (scan.azimuths.max(1) - 1) as f64 * scan.angle_increment,
-            ranges: scan.ranges[rows.clone()]
+            ranges: scan
+                .ranges
+                .get(rows)
+                .unwrap_or_default()
                 .iter()
                 .map(|&r| f64::from(r))
                 .collect(),
-            intensities: scan.hits[rows]
-                .iter()
-                .map(|h| match h {
-                    HitKind::None => 0.0,
-                    HitKind::Exhausted => 1.0,
-                    HitKind::Solid => 2.0,
-                })
-                .collect(),
+            intensities: Vec::new(),
         };
         self.write(ch, scan.stamp, &msg)?;
         let Some(ch) = self.echoes.get(sensor).copied().flatten() else {
             return Ok(());
         };
-        let mut data = Vec::with_capacity(scan.echoes.len() * ECHO_STRIDE as usize);
-        for i in 0..scan.len() {
-            let (az, el) = scan.angles(i);
-            let ray = crate::sensor::beam_ray(&scan.pose, az, el.sin_cos(), 0.0);
-            for e in scan.echoes_of(i) {
-                let p = ray.at(e.range);
-                for v in [p.x, p.y, p.z, e.power_db] {
-                    data.extend_from_slice(&(v as f32).to_le_bytes());
-                }
-                data.push(match e.kind {
-                    EchoKind::Surface => 0,
-                    EchoKind::Volume => 1,
-                });
-                data.push(e.bounces);
-            }
-        }
+        let (data, _) = frames::echo_points(scan);
         let msg = PointCloud {
             timestamp: stamp(scan.stamp),
-            frame_id: "world".into(),
+            frame_id: frame,
             pose: Some(fg_pose(&Pose::default())),
-            point_stride: ECHO_STRIDE,
-            fields: vec![
-                field("x", 0, NumericType::Float32),
-                field("y", 4, NumericType::Float32),
-                field("z", 8, NumericType::Float32),
-                field("power_db", 12, NumericType::Float32),
-                field("kind", 16, NumericType::Uint8),
-                field("bounces", 17, NumericType::Uint8),
-            ],
+            point_stride: frames::ECHO_STRIDE,
+            fields: fields(frames::ECHO_FIELDS),
             data: data.into(),
         };
         self.write(ch, scan.stamp, &msg)
@@ -331,33 +338,22 @@ impl<W: Write + Seek> McapLog<W> {
             return Ok(());
         };
         let t = sweep.image.timestamps_us.first().map_or(0.0, |&us| {
-            (us - crate::sensor::image::IMAGE_EPOCH_US) as f64 * 1e-6
+            crate::stamp::sim_time(u64::try_from(us).unwrap_or(0).saturating_mul(1000))
         });
         let msg = CompressedImage {
             timestamp: stamp(t),
-            frame_id: format!("{}/{}", self.robot, self.sensor_names[sweep.sensor]),
+            frame_id: self.sensor_frames[sweep.sensor].clone(),
             data: png.to_vec().into(),
             format: "png".into(),
         };
         self.write(image_ch, t, &msg)?;
-        let mut data = Vec::with_capacity(sweep.detections.len() * 13);
-        for (d, p) in &sweep.detections {
-            for v in [p.x, p.y, p.z] {
-                data.extend_from_slice(&(v as f32).to_le_bytes());
-            }
-            data.push(d.power);
-        }
+        let data = frames::detection_points(sweep.detections.iter().map(|(d, p)| (d.power, p)));
         let msg = PointCloud {
             timestamp: stamp(t),
-            frame_id: "world".into(),
+            frame_id: MAP.into(),
             pose: Some(fg_pose(&Pose::default())),
-            point_stride: 13,
-            fields: vec![
-                field("x", 0, NumericType::Float32),
-                field("y", 4, NumericType::Float32),
-                field("z", 8, NumericType::Float32),
-                field("power", 12, NumericType::Uint8),
-            ],
+            point_stride: frames::DETECTION_STRIDE,
+            fields: fields(frames::DETECTION_FIELDS),
             data: data.into(),
         };
         self.write(points_ch, t, &msg)
@@ -403,7 +399,7 @@ impl<W: Write + Seek> McapLog<W> {
         let o = grid.origin() + glam::DVec2::new(c0 as f64, r0 as f64) * res;
         let msg = FgGrid {
             timestamp: stamp(t),
-            frame_id: "world".into(),
+            frame_id: MAP.into(),
             pose: Some(fg_pose(&Pose::new(o.x, o.y, 0.0, 0.0))),
             column_count: w as u32,
             cell_size: Some(Vector2 { x: res, y: res }),
@@ -425,7 +421,7 @@ impl<W: Write + Seek> McapLog<W> {
     pub fn finish(mut self, end_time: f64, path: &[Pose]) -> Result<W, RecordError> {
         let msg = PosesInFrame {
             timestamp: stamp(end_time),
-            frame_id: "world".into(),
+            frame_id: MAP.into(),
             poses: path.iter().map(fg_pose).collect(),
         };
         self.write(self.path, end_time, &msg)?;
@@ -451,7 +447,7 @@ fn world_scene(world: &World) -> SceneUpdate {
             let c = color(m.color, alpha);
             let mut e = SceneEntity {
                 timestamp: stamp(0.0),
-                frame_id: "world".into(),
+                frame_id: MAP.into(),
                 id: o.name.clone().unwrap_or_else(|| format!("object-{i}")),
                 metadata: vec![foxglove::schemas::KeyValuePair {
                     key: "material".into(),
@@ -539,7 +535,7 @@ fn body_scene(robot: &Robot) -> SceneUpdate {
         deletions: Vec::new(),
         entities: vec![SceneEntity {
             timestamp: stamp(0.0),
-            frame_id: format!("{}/base_link", robot.name),
+            frame_id: BASE_LINK.into(),
             id: robot.name.clone(),
             frame_locked: true,
             cubes: vec![CubePrimitive {

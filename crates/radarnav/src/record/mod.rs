@@ -4,17 +4,23 @@
 //! (see [`crate::map::export`]) with its scores in `summary.json`. With
 //! [`Recorder::with_radar_images`], each imaging radar's rotations go to
 //! `radar/<sensor>/<µs>.png` (the Oxford Radar RobotCar layout) with `radar.timestamps`
-//! and `detections.csv` (see [`radar_images`]).
+//! and `detections.csv` (see [`radar_images`]). With [`RecordOptions::ros2_bag`], a rosbag2
+//! directory `ros2_bag/` (see [`ros2`]).
 //!
 //! `trajectory.csv` has one row per step:
 //! `time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped` — the true
 //! pose and the odometry estimate at the start of the step, the command in force during it
 //! (after the vehicle's limits; `left`/`right` are the track speeds) and whether its move was
-//! refused by a collision (0/1).
+//! refused by a collision (0/1) — and a last row with the state at the end of the run, where
+//! no command follows (zeros).
 
+#[cfg(feature = "mcap")]
+pub mod frames;
 #[cfg(feature = "mcap")]
 pub mod mcap_log;
 pub mod radar_images;
+#[cfg(feature = "mcap")]
+pub mod ros2;
 pub mod scan_log;
 
 pub use scan_log::{ScanLogError, ScanLogHeader, ScanLogWriter, read_scan_log};
@@ -74,6 +80,8 @@ pub const GRID_BYTES_PER_PERIOD: usize = 1_000_000;
 pub struct RecordOptions {
     /// Write `run.mcap` (needs the `mcap` feature).
     pub mcap: bool,
+    /// Write the rosbag2 directory `ros2_bag/` (needs the `mcap` feature).
+    pub ros2_bag: bool,
     /// Write the binary scan logs.
     pub scans: bool,
     /// Longer side of `path.png`, pixels.
@@ -84,6 +92,7 @@ impl Default for RecordOptions {
     fn default() -> Self {
         Self {
             mcap: cfg!(feature = "mcap"),
+            ros2_bag: false,
             scans: true,
             pixels: 900,
         }
@@ -222,6 +231,8 @@ pub struct Recorder<'w> {
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
     #[cfg(feature = "mcap")]
     mcap: Option<mcap_log::McapLog<Out>>,
+    #[cfg(feature = "mcap")]
+    bag: Option<ros2::Ros2Bag<Out>>,
     /// The paths (for the figure and the MCAP path).
     paths: PathTrace,
     vehicle: &'static VehicleSpec,
@@ -245,9 +256,15 @@ pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
 /// An MCAP error with its I/O cause tied to the MCAP file.
 #[cfg(feature = "mcap")]
 fn at_mcap(dir: &Path) -> impl FnOnce(RecordError) -> RecordError + '_ {
+    move |e| at_file(&dir.join(files::MCAP))(e)
+}
+
+/// An MCAP error with its I/O cause tied to the file at `path`.
+#[cfg(feature = "mcap")]
+fn at_file(path: &Path) -> impl FnOnce(RecordError) -> RecordError + '_ {
     move |e| match e {
         RecordError::McapIo(cause) => RecordError::Io {
-            path: dir.join(files::MCAP),
+            path: path.to_owned(),
             cause,
         },
         e => e,
@@ -302,6 +319,15 @@ impl<'w> Recorder<'w> {
         } else {
             None
         };
+        #[cfg(feature = "mcap")]
+        let bag = if options.ros2_bag {
+            let bag_dir = dir.join(ros2::BAG_DIR);
+            std::fs::create_dir_all(&bag_dir).map_err(io_at(&bag_dir))?;
+            let path = bag_path(dir);
+            Some(ros2::Ros2Bag::new(create(&mut staged, &path)?, robot).map_err(at_file(&path))?)
+        } else {
+            None
+        };
         Ok(Self {
             dir: dir.to_owned(),
             staged,
@@ -309,6 +335,8 @@ impl<'w> Recorder<'w> {
             scan_logs,
             #[cfg(feature = "mcap")]
             mcap,
+            #[cfg(feature = "mcap")]
+            bag,
             paths: PathTrace::default(),
             vehicle: robot.vehicle,
             written: Vec::new(),
@@ -392,6 +420,11 @@ impl<'w> Recorder<'w> {
         if let Some(m) = &mut self.mcap {
             m.radar_image(sweep, &png).map_err(at_mcap(&self.dir))?;
         }
+        #[cfg(feature = "mcap")]
+        if let Some(b) = &mut self.bag {
+            b.radar_image(sweep)
+                .map_err(at_file(&bag_path(&self.dir)))?;
+        }
         Ok(())
     }
 
@@ -403,6 +436,13 @@ impl<'w> Recorder<'w> {
         if let Some(m) = &mut self.mcap {
             for map in &maps {
                 m.add_map(map.name()).map_err(at_mcap(&self.dir))?;
+            }
+        }
+        #[cfg(feature = "mcap")]
+        if let Some(b) = &mut self.bag {
+            for map in &maps {
+                b.add_map(map.name())
+                    .map_err(at_file(&bag_path(&self.dir)))?;
             }
         }
         self.maps = maps;
@@ -423,6 +463,13 @@ impl<'w> Recorder<'w> {
                 bytes += m.grid(i, t, map.grid()).map_err(at_mcap(&self.dir))?;
             }
         }
+        if let Some(b) = &mut self.bag {
+            let path = bag_path(&self.dir);
+            for (i, map) in self.maps.iter().enumerate() {
+                b.grid(i, t, map.grid()).map_err(at_file(&path))?;
+                bytes += map.grid().width() * map.grid().height();
+            }
+        }
         Ok(bytes)
     }
 
@@ -435,6 +482,14 @@ impl<'w> Recorder<'w> {
         summary: &RunSummary,
         pixels: u32,
     ) -> Result<Recorded, RecordError> {
+        // The state at the end: no step starts there, so no step logged it.
+        self.log_step(&Step {
+            time: summary.duration,
+            truth: summary.final_pose,
+            odometry: summary.final_odometry,
+            command: crate::vehicle::Twist::default(),
+            bumped: false,
+        })?;
         let tpath = self.dir.join(files::TRAJECTORY);
         self.trajectory.flush().map_err(io_at(&tpath))?;
         #[cfg(feature = "mcap")]
@@ -462,12 +517,29 @@ impl<'w> Recorder<'w> {
                 .flush()
                 .map_err(io_at(&path))?;
         }
+        #[cfg(feature = "mcap")]
+        let bag_metadata = match self.bag.take() {
+            Some(b) => {
+                let path = bag_path(&self.dir);
+                let (mut out, metadata) = b.finish().map_err(at_file(&path))?;
+                out.flush().map_err(io_at(&path))?;
+                Some(metadata)
+            }
+            None => None,
+        };
         // Every growing file is complete: give each its name.
         let committed = self
             .staged
             .commit()
             .map_err(|(path, cause)| RecordError::Io { path, cause })?;
         self.written.extend(committed);
+        #[cfg(feature = "mcap")]
+        if let Some(metadata) = bag_metadata {
+            // Last in the bag: rosbag2 takes a directory with this file as a whole bag.
+            let path = self.dir.join(ros2::BAG_DIR).join(ros2::METADATA);
+            write_whole(&path, metadata.as_bytes())?;
+            self.written.push(path);
+        }
         let png = self.dir.join(files::PATH_PNG);
         let fig = self.paths.figure(
             &scenario.world,
@@ -622,7 +694,11 @@ impl Observer for Recorder<'_> {
         }
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
-            m.scan(sensor, scan).map_err(at_mcap(&self.dir))?;
+            m.scan(event).map_err(at_mcap(&self.dir))?;
+        }
+        #[cfg(feature = "mcap")]
+        if let Some(b) = &mut self.bag {
+            b.scan(event).map_err(at_file(&bag_path(&self.dir)))?;
         }
         if let Some((imager, _)) = &mut self.images {
             imager.on_scan(sensor, scan.stamp);
@@ -641,6 +717,22 @@ impl Observer for Recorder<'_> {
             let periods = bytes.div_ceil(GRID_BYTES_PER_PERIOD).max(1);
             self.next_grid += GRID_PERIOD * periods as f64;
         }
+        self.log_step(s)?;
+        let sweeps = match &mut self.images {
+            Some((imager, _)) => imager.on_step(s),
+            None => Vec::new(),
+        };
+        for sweep in &sweeps {
+            self.write_sweep(sweep)?;
+        }
+        let Ok(()) = self.paths.on_step(s);
+        Ok(())
+    }
+}
+
+impl Recorder<'_> {
+    /// Writes a step's row of `trajectory.csv` and its MCAP and bag messages.
+    fn log_step(&mut self, s: &Step) -> Result<(), RecordError> {
         let (t, o) = (&s.truth, &s.odometry);
         let (left, right) = self.vehicle.tracks(s.command);
         // Straight into the buffered file: no string per step.
@@ -668,14 +760,16 @@ impl Observer for Recorder<'_> {
         if let Some(m) = &mut self.mcap {
             m.step(s).map_err(at_mcap(&self.dir))?;
         }
-        let sweeps = match &mut self.images {
-            Some((imager, _)) => imager.on_step(s),
-            None => Vec::new(),
-        };
-        for sweep in &sweeps {
-            self.write_sweep(sweep)?;
+        #[cfg(feature = "mcap")]
+        if let Some(b) = &mut self.bag {
+            b.step(s).map_err(at_file(&bag_path(&self.dir)))?;
         }
-        let Ok(()) = self.paths.on_step(s);
         Ok(())
     }
+}
+
+/// The bag's MCAP file in the output directory `dir`.
+#[cfg(feature = "mcap")]
+fn bag_path(dir: &Path) -> PathBuf {
+    dir.join(ros2::BAG_DIR).join(ros2::BAG_FILE)
 }

@@ -29,9 +29,8 @@ const C: f64 = 299_792_458.0;
 /// The Oxford row header: 8 bytes timestamp, 2 bytes encoder, 1 byte valid flag.
 pub const ROW_HEADER: usize = 11;
 
-/// The UNIX time, µs, that simulation time 0 is stamped with in images (2023-11-14): a fixed
-/// epoch, so that tools reading stamps as wall-clock time get plausible ones.
-pub const IMAGE_EPOCH_US: i64 = 1_700_000_000_000_000;
+/// The UNIX time, µs, that simulation time 0 is stamped with in images (see [`crate::stamp`]).
+pub const IMAGE_EPOCH_US: i64 = crate::stamp::EPOCH_US;
 
 /// Writes an 8-bit grey PNG of `width` × `height` pixels, row after row.
 pub fn write_grey_png<W: Write>(
@@ -85,6 +84,17 @@ impl PowerImage {
     /// bytes 0–7 the `i64` little-endian UNIX µs stamp, 8–9 the `u16` little-endian encoder
     /// count, 10 the valid flag (255), then one byte of power per range bin.
     pub fn write_png<W: Write>(&self, out: W) -> Result<(), png::EncodingError> {
+        write_grey_png(
+            out,
+            ROW_HEADER + self.bins,
+            self.rows(),
+            &self.oxford_rows(),
+        )
+    }
+
+    /// The pixels of [`PowerImage::write_png`], row after row ([`ROW_HEADER`] + `bins` bytes
+    /// a row).
+    pub fn oxford_rows(&self) -> Vec<u8> {
         let width = ROW_HEADER + self.bins;
         let mut data = Vec::with_capacity(width * self.rows());
         for k in 0..self.rows() {
@@ -93,7 +103,7 @@ impl PowerImage {
             data.push(255);
             data.extend_from_slice(&self.power[k * self.bins..(k + 1) * self.bins]);
         }
-        write_grey_png(out, width, self.rows(), &data)
+        data
     }
 
     /// The `radar.timestamps` line of this image: "<µs> 1" (1 = valid), as the dataset's.
