@@ -259,6 +259,12 @@ fn at_mcap(dir: &Path) -> impl FnOnce(RecordError) -> RecordError + '_ {
     move |e| at_file(&dir.join(files::MCAP))(e)
 }
 
+/// A bag error with its I/O cause tied to the bag's MCAP file (the path made only on error).
+#[cfg(feature = "mcap")]
+fn at_bag(dir: &Path) -> impl FnOnce(RecordError) -> RecordError + '_ {
+    move |e| at_file(&bag_path(dir))(e)
+}
+
 /// An MCAP error with its I/O cause tied to the file at `path`.
 #[cfg(feature = "mcap")]
 fn at_file(path: &Path) -> impl FnOnce(RecordError) -> RecordError + '_ {
@@ -422,8 +428,7 @@ impl<'w> Recorder<'w> {
         }
         #[cfg(feature = "mcap")]
         if let Some(b) = &mut self.bag {
-            b.radar_image(sweep)
-                .map_err(at_file(&bag_path(&self.dir)))?;
+            b.radar_image(sweep).map_err(at_bag(&self.dir))?;
         }
         Ok(())
     }
@@ -441,8 +446,7 @@ impl<'w> Recorder<'w> {
         #[cfg(feature = "mcap")]
         if let Some(b) = &mut self.bag {
             for map in &maps {
-                b.add_map(map.name())
-                    .map_err(at_file(&bag_path(&self.dir)))?;
+                b.add_map(map.name()).map_err(at_bag(&self.dir))?;
             }
         }
         self.maps = maps;
@@ -464,9 +468,8 @@ impl<'w> Recorder<'w> {
             }
         }
         if let Some(b) = &mut self.bag {
-            let path = bag_path(&self.dir);
             for (i, map) in self.maps.iter().enumerate() {
-                b.grid(i, t, map.grid()).map_err(at_file(&path))?;
+                b.grid(i, t, map.grid()).map_err(at_bag(&self.dir))?;
                 bytes += map.grid().width() * map.grid().height();
             }
         }
@@ -698,7 +701,7 @@ impl Observer for Recorder<'_> {
         }
         #[cfg(feature = "mcap")]
         if let Some(b) = &mut self.bag {
-            b.scan(event).map_err(at_file(&bag_path(&self.dir)))?;
+            b.scan(event).map_err(at_bag(&self.dir))?;
         }
         if let Some((imager, _)) = &mut self.images {
             imager.on_scan(sensor, scan.stamp);
@@ -762,7 +765,7 @@ impl Recorder<'_> {
         }
         #[cfg(feature = "mcap")]
         if let Some(b) = &mut self.bag {
-            b.step(s).map_err(at_file(&bag_path(&self.dir)))?;
+            b.step(s).map_err(at_bag(&self.dir))?;
         }
         Ok(())
     }
