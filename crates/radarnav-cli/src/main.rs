@@ -4,6 +4,7 @@ mod bench_cmd;
 mod compare_cmd;
 mod nav_suite_cmd;
 mod run_cmd;
+mod serve_cmd;
 mod signal_cmd;
 mod signal_demo;
 
@@ -48,6 +49,25 @@ enum Command {
         /// Extra scans per sensor for the mean share.
         #[arg(long, default_value_t = 100, value_parser = count::<usize>(&limits::REPEATS))]
         repeats: usize,
+    },
+    /// Serve a scenario to USARSim clients (its TCP text protocol): each client INITs a P3AT
+    /// with the scenario robot's sensors (as RangeScanners), drives it with DRIVE and
+    /// receives SEN and STA messages in real time.
+    Serve {
+        /// A built-in name or a path to a .toml file.
+        scenario: String,
+        /// TCP port (USARSim's is 3000).
+        #[arg(long, default_value_t = 3000)]
+        port: u16,
+        /// Address to listen on (0.0.0.0 for clients on other machines).
+        #[arg(long, default_value = "127.0.0.1")]
+        bind: String,
+        /// Simulated seconds per wall-clock second.
+        #[arg(long, default_value_t = 1.0, value_parser = number(&limits::SERVE_SPEED))]
+        speed: f64,
+        /// The scenario robot whose vehicle and sensors clients get (default: the first).
+        #[arg(long)]
+        robot: Option<String>,
     },
     /// List the built-in scenarios.
     Scenarios,
@@ -303,6 +323,13 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Serve {
+            scenario,
+            port,
+            bind,
+            speed,
+            robot,
+        } => serve_cmd::run(&load(&scenario)?, robot.as_deref(), &bind, port, speed),
         Command::Limits => {
             say!("{}", limits::markdown_table().trim_end());
             Ok(())

@@ -577,3 +577,47 @@ fn bench_exports_a_scene_and_traces_its_rays_for_the_peers() {
     let e = radarnav(&["bench", "--rays", "/nonexistent-radarnav-scene"]);
     assert!(String::from_utf8_lossy(&e.stderr).contains("meta.json"));
 }
+
+/// `radarnav serve` on an ephemeral loopback port: it names its address, greets a USARSim
+/// client, answers GETSTARTPOSES, and stops cleanly on SIGTERM.
+#[test]
+fn serve_greets_a_usarsim_client_and_stops_on_sigterm() {
+    use std::io::{BufRead, BufReader, Write};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_radarnav"))
+        .args(["serve", "bug-spiral", "--port", "0"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("serve");
+    let mut err = BufReader::new(child.stderr.take().expect("stderr"));
+    let mut first = String::new();
+    err.read_line(&mut first).expect("the serving line");
+    let addr = first
+        .split(" on ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .unwrap_or_else(|| panic!("no address in {first:?}"));
+    assert!(addr.starts_with("127.0.0.1:"), "{first}");
+    let stream = std::net::TcpStream::connect(addr).expect("connect");
+    stream
+        .set_read_timeout(Some(std::time::Duration::from_secs(20)))
+        .unwrap();
+    let mut lines = BufReader::new(stream.try_clone().unwrap());
+    let mut line = String::new();
+    lines.read_line(&mut line).unwrap();
+    assert_eq!(
+        line,
+        "NFO {Gametype BotDeathMatch} {Level bug-spiral} {TimeLimit 0}\r\n"
+    );
+    (&stream).write_all(b"GETSTARTPOSES\r\n").unwrap();
+    line.clear();
+    lines.read_line(&mut line).unwrap();
+    assert!(line.starts_with("NFO {StartPoses 1} {"), "{line}");
+    // SAFETY: kill(2) on our own child's pid.
+    let pid = i32::try_from(child.id()).expect("pid");
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    let status = child.wait().expect("wait");
+    let mut rest = String::new();
+    let _ = std::io::Read::read_to_string(&mut err, &mut rest);
+    assert!(status.success(), "{status:?}: {rest}");
+    assert!(rest.contains("stopped"), "{rest}");
+}

@@ -30,6 +30,7 @@ pub mod sensor;
 pub mod sim;
 pub mod stamp;
 pub mod trials;
+pub mod usarsim;
 pub mod vehicle;
 pub mod world;
 
