@@ -6,11 +6,12 @@
 //! the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`] (the
 //! P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`] (occupancy
 //! grids that tell seen-through from passable), [`compare`] (exploration experiments), [`trials`]
-//! (navigation trials), [`mission`] and [`nav`] (what drives the robot), [`record`] (run outputs:
-//! CSV, scan logs, MCAP), [`output`] (files written whole or not at all), [`stamp`] (the epoch of
-//! every output's time stamps), [`limits`] (the valid range of every input and the size estimates
-//! that bound a run), [`render`] (figures), [`demo`] (the thesis experiment), [`peers`] (the scene
-//! and rays of the benchmark against Embree and Bullet).
+//! (navigation trials), [`mission`] and [`nav`] (what drives the robot), [`usarsim`] (a server for
+//! USARSim's clients), [`record`] (run outputs: CSV, scan logs, MCAP, rosbag2), [`output`] (files written
+//! whole or not at all), [`stamp`] (the epoch of every output's time stamps), [`limits`] (the valid
+//! range of every input and the size estimates that bound a run), [`render`] (figures), [`demo`]
+//! (the thesis experiment), [`peers`] (the scene and rays of the benchmark against Embree and
+//! Bullet).
 
 #![warn(missing_docs)]
 
