@@ -3,6 +3,7 @@
 mod bench_cmd;
 mod compare_cmd;
 mod nav_suite_cmd;
+mod ros2_cmd;
 mod run_cmd;
 mod serve_cmd;
 mod signal_cmd;
@@ -68,6 +69,25 @@ enum Command {
         /// The scenario robot whose vehicle and sensors clients get (default: the first).
         #[arg(long)]
         robot: Option<String>,
+    },
+    /// Run a scenario's robot as a live ROS 2 node (needs the `ros2` build feature): it
+    /// publishes /clock, /tf, /tf_static, /odom, /scan/<sensor> and maps, and drives by
+    /// geometry_msgs/Twist on /cmd_vel.
+    Ros2 {
+        /// A built-in name or a path to a .toml file.
+        scenario: String,
+        /// Simulated seconds per wall-clock second.
+        #[arg(long, default_value_t = 1.0, value_parser = number(&limits::SERVE_SPEED))]
+        speed: f64,
+        /// Stop after this much simulated time, seconds (default: at Ctrl-C).
+        #[arg(long, value_parser = number(&limits::DURATION))]
+        duration: Option<f64>,
+        /// The scenario robot to run (default: the first).
+        #[arg(long)]
+        robot: Option<String>,
+        /// Publish no maps.
+        #[arg(long)]
+        no_maps: bool,
     },
     /// List the built-in scenarios.
     Scenarios,
@@ -330,6 +350,19 @@ fn run(cli: Cli) -> Result<()> {
             speed,
             robot,
         } => serve_cmd::run(&load(&scenario)?, robot.as_deref(), &bind, port, speed),
+        Command::Ros2 {
+            scenario,
+            speed,
+            duration,
+            robot,
+            no_maps,
+        } => ros2_cmd::run(&ros2_cmd::Ros2Args {
+            scenario: &load(&scenario)?,
+            robot: robot.as_deref(),
+            speed,
+            duration,
+            maps: !no_maps,
+        }),
         Command::Limits => {
             say!("{}", limits::markdown_table().trim_end());
             Ok(())

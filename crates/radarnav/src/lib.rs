@@ -7,11 +7,11 @@
 //! P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`] (occupancy
 //! grids that tell seen-through from passable), [`compare`] (exploration experiments), [`trials`]
 //! (navigation trials), [`mission`] and [`nav`] (what drives the robot), [`usarsim`] (a server for
-//! USARSim's clients), [`record`] (run outputs: CSV, scan logs, MCAP, rosbag2), [`output`] (files written
-//! whole or not at all), [`stamp`] (the epoch of every output's time stamps), [`limits`] (the valid
-//! range of every input and the size estimates that bound a run), [`render`] (figures), [`demo`]
-//! (the thesis experiment), [`peers`] (the scene and rays of the benchmark against Embree and
-//! Bullet).
+//! USARSim's clients), `ros2_node` (with the `ros2` feature: a live ROS 2 node), [`record`] (run
+//! outputs: CSV, scan logs, MCAP, rosbag2), [`output`] (files written whole or not at all),
+//! [`stamp`] (the epoch of every output's time stamps), [`limits`] (the valid range of every input
+//! and the size estimates that bound a run), [`render`] (figures), [`demo`] (the thesis
+//! experiment), [`peers`] (the scene and rays of the benchmark against Embree and Bullet).
 
 #![warn(missing_docs)]
 
@@ -26,6 +26,8 @@ pub mod peers;
 pub mod pose;
 pub mod record;
 pub mod render;
+#[cfg(feature = "ros2")]
+pub mod ros2_node;
 pub mod scenario;
 pub mod sensor;
 pub mod sim;

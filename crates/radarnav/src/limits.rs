@@ -99,8 +99,8 @@ limits! {
     DURATION = "duration, --duration" in "[sim], run, compare": 1e-3, 1e6, "s", "11.6 days; the output estimate bounds it further";
     /// `--sim` of `bench`.
     BENCH_SIM = "--sim" in "bench": 1e-3, 1e6, "s", "as duration";
-    /// `--speed` of `serve`: simulated seconds per wall-clock second.
-    SERVE_SPEED = "--speed" in "serve": 0.01, 100.0, "x real time", "1: real time, as USARSim";
+    /// `--speed` of `serve` and `ros2`: simulated seconds per wall-clock second.
+    SERVE_SPEED = "--speed" in "serve, ros2": 0.01, 100.0, "x real time", "1: real time, as USARSim";
     /// Any coordinate: object centres, wall and prism points, start poses, goals, waypoints.
     COORD = "x, y, z, center, points, polygon, goal" in "object, robot, mission": -5e3, 5e3, "m", "a world at most 10 km across";
     /// Object sizes: sphere and cylinder radius, box size, wall thickness and height.

@@ -213,6 +213,38 @@ pub fn parse_teleop_csv(src: &str, file: &str) -> Result<Vec<TeleopStep>, Missio
     Ok(steps)
 }
 
+/// A robot driven from outside the simulation (a USARSim client's `DRIVE`, a ROS 2
+/// `/cmd_vel`): every call returns the last command set through [`Remote::command`].
+pub struct Remote {
+    command: std::rc::Rc<std::cell::Cell<DriveCommand>>,
+    rate: f64,
+}
+
+impl Remote {
+    /// Called at `rate_hz` (the simulation step's rate takes a command at the next step).
+    pub fn new(rate_hz: f64) -> Self {
+        Self {
+            command: std::rc::Rc::new(std::cell::Cell::new(DriveCommand::STOP)),
+            rate: rate_hz,
+        }
+    }
+
+    /// The command cell shared with whoever sets it (the vehicle's limits apply in the step).
+    pub fn command(&self) -> std::rc::Rc<std::cell::Cell<DriveCommand>> {
+        std::rc::Rc::clone(&self.command)
+    }
+}
+
+impl Controller for Remote {
+    fn rate_hz(&self) -> f64 {
+        self.rate
+    }
+
+    fn update(&mut self, _input: &crate::sim::ControlInput<'_>) -> crate::sim::Decision {
+        crate::sim::Decision::Drive(self.command.get())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

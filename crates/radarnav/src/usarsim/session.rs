@@ -14,10 +14,11 @@ use std::rc::Rc;
 use super::protocol::{
     Message, float_string, from_usar, parse_vector, usar_position, usar_yaw, vector_string,
 };
+use crate::mission::Remote;
 use crate::pose::Pose;
 use crate::scenario::{Robot, Scenario};
 use crate::sensor::{Scan, SensorConfig};
-use crate::sim::{ControlInput, Controller, Decision, Observer, ScanEvent, Simulation};
+use crate::sim::{Observer, ScanEvent, Simulation};
 use crate::vehicle::DriveCommand;
 
 /// USARSim's class name of the one robot served.
@@ -149,22 +150,6 @@ pub fn parse_init(m: &Message, scenario: &Scenario, fallback_name: &str) -> Resu
 /// The client's drive command, shared with the simulation's controller.
 type Command = Rc<Cell<DriveCommand>>;
 
-/// Drives by the last `DRIVE`, every step.
-struct Remote {
-    command: Command,
-    rate: f64,
-}
-
-impl Controller for Remote {
-    fn rate_hz(&self) -> f64 {
-        self.rate
-    }
-
-    fn update(&mut self, _input: &ControlInput<'_>) -> Decision {
-        Decision::Drive(self.command.get())
-    }
-}
-
 /// Collects a `SEN` line per scan.
 struct SenLines<'r> {
     robot: &'r Robot,
@@ -256,11 +241,8 @@ impl<'a> Driving<'a> {
         seed: u64,
         time_offset: f64,
     ) -> Result<Self, String> {
-        let command: Command = Rc::new(Cell::new(DriveCommand::STOP));
-        let remote = Remote {
-            command: Rc::clone(&command),
-            rate: 1.0 / dt,
-        };
+        let remote = Remote::new(1.0 / dt);
+        let command = remote.command();
         let settings = crate::sim::RunSettings {
             dt,
             duration: crate::limits::DURATION.max,

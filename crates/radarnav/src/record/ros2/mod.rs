@@ -20,6 +20,7 @@
 //! * `/map/<name>` (nav_msgs/OccupancyGrid, `map`): each map as the Foxglove recording logs
 //!   it (see [`super::GRID_PERIOD`]), whole; -1 unknown, 0 free, 100 impassable.
 
+pub mod convert;
 pub mod msg;
 
 use std::collections::BTreeMap;
@@ -28,7 +29,7 @@ use std::io::{Seek, Write};
 use serde::Serialize;
 
 use super::RecordError;
-use super::frames::{self, BASE_LINK, MAP, ODOM, PointFieldSpec};
+use super::frames;
 use super::mcap_log::{mcap_err, mcap_msg};
 use super::radar_images::SweepImage;
 use crate::map::Grid;
@@ -37,7 +38,6 @@ use crate::scenario::Robot;
 use crate::sensor::ReturnMode;
 use crate::sim::{ScanEvent, Step};
 use crate::stamp::unix_ns;
-use msg::{Header, Time};
 
 /// The bag's directory inside the run's output directory.
 pub const BAG_DIR: &str = "ros2_bag";
@@ -58,7 +58,7 @@ struct Topic {
 struct SensorTopics {
     frame: String,
     plane: usize,
-    scan_time: f32,
+    scan_time: f64,
     scan: usize,
     echoes: Option<usize>,
     radar: Option<(usize, usize)>,
@@ -125,56 +125,6 @@ fn json<T: Serialize>(value: &T) -> Result<String, RecordError> {
     serde_json::to_string_pretty(value).map_err(|e| mcap_msg(&e.to_string()))
 }
 
-fn header(ns: u64, frame: &str) -> Header {
-    Header {
-        stamp: Time::from_ns(ns),
-        frame_id: frame.to_owned(),
-    }
-}
-
-fn fields(spec: &[PointFieldSpec]) -> Vec<msg::PointField> {
-    spec.iter()
-        .map(|&(name, offset, kind)| msg::PointField {
-            name: name.to_owned(),
-            offset,
-            datatype: match kind {
-                frames::FieldType::F32 => msg::FLOAT32,
-                frames::FieldType::U8 => msg::UINT8,
-            },
-            count: 1,
-        })
-        .collect()
-}
-
-fn cloud(
-    ns: u64,
-    frame: &str,
-    spec: &[PointFieldSpec],
-    stride: u32,
-    data: Vec<u8>,
-) -> msg::PointCloud2 {
-    let width = (data.len() / stride as usize) as u32;
-    msg::PointCloud2 {
-        header: header(ns, frame),
-        height: 1,
-        width,
-        fields: fields(spec),
-        is_bigendian: false,
-        point_step: stride,
-        row_step: width * stride,
-        data,
-        is_dense: true,
-    }
-}
-
-fn transform(ns: u64, parent: &str, child: &str, pose: &Pose) -> msg::TransformStamped {
-    msg::TransformStamped {
-        header: header(ns, parent),
-        child_frame_id: child.to_owned(),
-        transform: msg::Transform::from(pose),
-    }
-}
-
 impl<W: Write + Seek> Ros2Bag<W> {
     /// Starts a bag of `robot`'s run and writes `/tf_static`.
     pub fn new(out: W, robot: &Robot) -> Result<Self, RecordError> {
@@ -232,21 +182,14 @@ impl<W: Write + Seek> Ros2Bag<W> {
             bag.sensors.push(SensorTopics {
                 frame: frames::sensor_frame(&s.name),
                 plane: frames::horizontal_plane(&s.config.elevations),
-                scan_time: (1.0 / s.config.rate_hz) as f32,
+                scan_time: 1.0 / s.config.rate_hz,
                 scan,
                 echoes,
                 radar,
             });
         }
         let t0 = unix_ns(0.0);
-        let mounts = msg::TfMessage {
-            transforms: robot
-                .sensors
-                .iter()
-                .zip(&bag.sensors)
-                .map(|(s, topics)| transform(t0, BASE_LINK, &topics.frame, &s.mount))
-                .collect(),
-        };
+        let mounts = convert::tf_static(t0, robot);
         bag.write(tf_static, t0, &mounts)?;
         Ok(bag)
     }
@@ -311,53 +254,16 @@ impl<W: Write + Seek> Ros2Bag<W> {
             return Ok(());
         }
         self.last_tf = Some(ns);
-        let msg = msg::TfMessage {
-            transforms: vec![
-                transform(ns, MAP, ODOM, &frames::map_to_odom(truth, odometry)),
-                transform(ns, ODOM, BASE_LINK, odometry),
-            ],
-        };
+        let msg = convert::tf(ns, truth, odometry);
         self.write(self.tf, ns, &msg)
     }
 
     /// Logs a step: `/clock`, `/tf`, `/odom`.
     pub fn step(&mut self, step: &Step) -> Result<(), RecordError> {
         let ns = unix_ns(step.time);
-        self.write(
-            self.clock,
-            ns,
-            &msg::Clock {
-                clock: Time::from_ns(ns),
-            },
-        )?;
+        self.write(self.clock, ns, &convert::clock(ns))?;
         self.tf(ns, &step.truth, &step.odometry)?;
-        let executed = if step.bumped {
-            crate::vehicle::Twist::default()
-        } else {
-            step.command
-        };
-        let odom = msg::Odometry {
-            header: header(ns, ODOM),
-            child_frame_id: BASE_LINK.to_owned(),
-            pose: msg::PoseWithCovariance {
-                pose: msg::PoseMsg::from(&step.odometry),
-                covariance: msg::Covariance::default(),
-            },
-            twist: msg::TwistWithCovariance {
-                twist: msg::TwistMsg {
-                    linear: msg::Vector3 {
-                        x: executed.v,
-                        ..Default::default()
-                    },
-                    angular: msg::Vector3 {
-                        z: executed.omega,
-                        ..Default::default()
-                    },
-                },
-                covariance: msg::Covariance::default(),
-            },
-        };
-        self.write(self.odom, ns, &odom)
+        self.write(self.odom, ns, &convert::odometry(ns, step))
     }
 
     /// Logs a scan: its transform (if taken between steps), its LaserScan and its echoes.
@@ -366,26 +272,12 @@ impl<W: Write + Seek> Ros2Bag<W> {
         let ns = unix_ns(scan.stamp);
         self.tf(ns, &event.truth, &event.odometry)?;
         let topics = &self.sensors[event.sensor];
-        let rows = topics.plane * scan.azimuths..(topics.plane + 1) * scan.azimuths;
-        let angle_max = scan.angle_min + (scan.azimuths.max(1) - 1) as f64 * scan.angle_increment;
-        let msg = msg::LaserScan {
-            header: header(ns, &topics.frame),
-            angle_min: scan.angle_min as f32,
-            angle_max: angle_max as f32,
-            angle_increment: scan.angle_increment as f32,
-            time_increment: 0.0,
-            scan_time: topics.scan_time,
-            range_min: scan.range_min as f32,
-            range_max: scan.range_max as f32,
-            ranges: scan.ranges.get(rows).unwrap_or_default().to_vec(),
-            intensities: Vec::new(),
-        };
-        let (scan_topic, echoes) = (topics.scan, topics.echoes);
-        let frame = topics.frame.clone();
-        self.write(scan_topic, ns, &msg)?;
-        if let Some(topic) = echoes {
-            let (data, _) = frames::echo_points(scan);
-            let msg = cloud(ns, &frame, frames::ECHO_FIELDS, frames::ECHO_STRIDE, data);
+        let msg = convert::laser_scan(scan, &topics.frame, topics.plane, topics.scan_time);
+        let echoes = topics
+            .echoes
+            .map(|t| (t, convert::echoes(scan, &topics.frame)));
+        self.write(topics.scan, ns, &msg)?;
+        if let Some((topic, msg)) = echoes {
             self.write(topic, ns, &msg)?;
         }
         Ok(())
@@ -399,34 +291,9 @@ impl<W: Write + Seek> Ros2Bag<W> {
         let Some((image_topic, points_topic)) = topics.radar else {
             return Ok(());
         };
-        let frame = topics.frame.clone();
-        let img = &sweep.image;
-        let first_us = img
-            .timestamps_us
-            .first()
-            .copied()
-            .unwrap_or(crate::stamp::EPOCH_US);
-        let ns = u64::try_from(first_us).unwrap_or(0).saturating_mul(1000);
-        let width = crate::sensor::image::ROW_HEADER + img.bins;
-        let msg = msg::Image {
-            header: header(ns, &frame),
-            height: img.rows() as u32,
-            width: width as u32,
-            encoding: "mono8".into(),
-            is_bigendian: 0,
-            step: width as u32,
-            data: img.oxford_rows(),
-        };
-        self.write(image_topic, ns, &msg)?;
-        let data = frames::detection_points(sweep.detections.iter().map(|(d, p)| (d.power, p)));
-        let msg = cloud(
-            ns,
-            MAP,
-            frames::DETECTION_FIELDS,
-            frames::DETECTION_STRIDE,
-            data,
-        );
-        self.write(points_topic, ns, &msg)
+        let (ns, image, points) = convert::radar_image(sweep, &topics.frame);
+        self.write(image_topic, ns, &image)?;
+        self.write(points_topic, ns, &points)
     }
 
     /// Adds the topic of map `name`; returns its index for [`Ros2Bag::grid`].
@@ -443,22 +310,7 @@ impl<W: Write + Seek> Ros2Bag<W> {
     /// Logs map `map` (an index from [`Ros2Bag::add_map`]) as it is at time `t`.
     pub fn grid(&mut self, map: usize, t: f64, grid: &Grid) -> Result<(), RecordError> {
         let ns = unix_ns(t);
-        let o = grid.origin();
-        let data = (0..grid.width() * grid.height())
-            .map(|i| frames::occupancy(grid.class_at(i)))
-            .collect();
-        let msg = msg::OccupancyGrid {
-            header: header(ns, MAP),
-            info: msg::MapMetaData {
-                map_load_time: Time::from_ns(ns),
-                resolution: grid.resolution() as f32,
-                width: grid.width() as u32,
-                height: grid.height() as u32,
-                origin: msg::PoseMsg::from(&Pose::new(o.x, o.y, 0.0, 0.0)),
-            },
-            data,
-        };
-        self.write(self.maps[map], ns, &msg)
+        self.write(self.maps[map], ns, &convert::occupancy_grid(ns, grid))
     }
 
     /// Closes the MCAP file; returns the sink and the text of `metadata.yaml`.
