@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint32
+from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint8, uint32
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -47,6 +47,17 @@ class LaserScan(IdlStruct, typename="sensor_msgs::msg::dds_::LaserScan_"):
     range_max: float32
     ranges: sequence[float32]
     intensities: sequence[float32]
+
+
+@dataclass
+class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
+    header: Header
+    height: uint32
+    width: uint32
+    encoding: str
+    is_bigendian: uint8
+    step: uint32
+    data: sequence[uint8]
 
 
 @dataclass
@@ -123,6 +134,7 @@ class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
 
 LISTEN = float(sys.argv[1]) if len(sys.argv) > 1 else 4.0
 DRIVE = float(sys.argv[2]) if len(sys.argv) > 2 else 3.0
+IMAGING = sys.argv[3] if len(sys.argv) > 3 else None  # an imaging radar's name
 
 reliable = Qos(Policy.Reliability.Reliable(max_blocking_time=1), Policy.Durability.Volatile,
                Policy.History.KeepLast(100))
@@ -135,6 +147,12 @@ readers = {
     "/odom": DataReader(dp, Topic(dp, "rt/odom", Odometry), qos=reliable),
     "/clock": DataReader(dp, Topic(dp, "rt/clock", Clock), qos=reliable),
 }
+if IMAGING:
+    readers[f"/scan/{IMAGING}"] = DataReader(
+        dp, Topic(dp, f"rt/scan/{IMAGING}", LaserScan), qos=reliable)
+if IMAGING:
+    readers[f"/radar/{IMAGING}/image"] = DataReader(
+        dp, Topic(dp, f"rt/radar/{IMAGING}/image", Image), qos=reliable)
 tf_static = DataReader(dp, Topic(dp, "rt/tf_static", TFMessage), qos=latched)
 cmd_vel = DataWriter(dp, Topic(dp, "rt/cmd_vel", Twist), qos=reliable)
 
@@ -164,6 +182,8 @@ def poll():
                 clock.append(m.clock.sec + m.clock.nanosec * 1e-9)
                 continue
             frames.setdefault(topic, m.header.frame_id)
+            if topic.endswith("/image"):
+                frames.setdefault(topic + " size", [m.height, m.width, len(m.data), m.encoding])
             if topic == "/odom":
                 frames.setdefault("/odom child", m.child_frame_id)
                 odom_x.append(m.pose.pose.position.x)

@@ -4,8 +4,8 @@ loopback exists there, multicast is off, and the peers find each other by unicas
 127.0.0.1, so no packet can leave the machine.
 
 The peer (ros2_peer.py) must receive /scan/radar, /scan/laser, /odom and /clock at their
-rates (4, 40, 20 and 20 Hz on foliage-wall), in their REP-105 frames, the mounts on the
-latched /tf_static, and, after it publishes geometry_msgs/Twist (0.3 m/s) on /cmd_vel for
+rates (4, 40, 20 and 20 Hz on foliage-wall), the Navtech's polar images (a rotation each
+0.25 s), in their REP-105 frames, the mounts on the latched /tf_static, and, after it publishes geometry_msgs/Twist (0.3 m/s) on /cmd_vel for
 3 s, see /odom move forward.
 """
 
@@ -31,9 +31,9 @@ SCRIPT = """
 set -e
 ip link set lo up
 ip link set lo multicast off
-"$RADARNAV" ros2 foliage-wall --duration 40 --no-maps 2>"$LOG" &
+"$RADARNAV" ros2 foliage-wall --duration 40 --no-maps --add-sensor navtech_cts350x 2>"$LOG" &
 node=$!
-"$PYTHON" "$PEER" 4 3
+"$PYTHON" "$PEER" 4 3 navtech_cts350x
 kill -INT $node
 wait $node
 """
@@ -59,7 +59,9 @@ class Ros2Live(unittest.TestCase):
 
     def test_topics_arrive_at_their_rates(self):
         rates = self.result["rates"]
-        for topic, hz in {"/scan/radar": 4, "/scan/laser": 40, "/odom": 20, "/clock": 20}.items():
+        expected = {"/scan/radar": 4, "/scan/laser": 40, "/odom": 20, "/clock": 20,
+                    "/scan/navtech_cts350x": 4, "/radar/navtech_cts350x/image": 4}
+        for topic, hz in expected.items():
             # Loose bounds: the peer counts over a 4 s window on a shared machine.
             self.assertGreater(rates[topic], 0.5 * hz, f"{topic}: {rates}")
             self.assertLess(rates[topic], 1.5 * hz, f"{topic}: {rates}")
@@ -69,7 +71,11 @@ class Ros2Live(unittest.TestCase):
         self.assertEqual((f["/scan/radar"], f["/scan/laser"]), ("radar", "laser"))
         self.assertEqual((f["/odom"], f["/odom child"]), ("odom", "base_link"))
         self.assertEqual(sorted(map(tuple, self.result["tf_static"])),
-                         [("base_link", "laser"), ("base_link", "radar")])
+                         [("base_link", "laser"), ("base_link", "navtech_cts350x"),
+                          ("base_link", "radar")])
+        self.assertEqual(f["/radar/navtech_cts350x/image"], "navtech_cts350x")
+        # 400 azimuths, each row 11 header bytes and 3768 bins, mono8.
+        self.assertEqual(f["/radar/navtech_cts350x/image size"], [400, 3779, 400 * 3779, "mono8"])
         self.assertTrue(self.result["clock_increasing"])
         self.assertGreaterEqual(self.result["clock_first"], 1_700_000_000)
 

@@ -88,6 +88,10 @@ enum Command {
         /// Publish no maps.
         #[arg(long)]
         no_maps: bool,
+        /// Sensor presets to mount beside the robot's own, comma-separated (an imaging
+        /// radar's images go to /radar/<sensor>/image).
+        #[arg(long, value_delimiter = ',')]
+        add_sensor: Vec<String>,
     },
     /// List the built-in scenarios.
     Scenarios,
@@ -356,12 +360,14 @@ fn run(cli: Cli) -> Result<()> {
             duration,
             robot,
             no_maps,
+            add_sensor,
         } => ros2_cmd::run(&ros2_cmd::Ros2Args {
             scenario: &load(&scenario)?,
             robot: robot.as_deref(),
             speed,
             duration,
             maps: !no_maps,
+            add_sensors: &add_sensor,
         }),
         Command::Limits => {
             say!("{}", limits::markdown_table().trim_end());

@@ -11,6 +11,7 @@ pub struct Ros2Args<'a> {
     pub speed: f64,
     pub duration: Option<f64>,
     pub maps: bool,
+    pub add_sensors: &'a [String],
 }
 
 /// Runs the node until Ctrl-C or the duration.
@@ -23,12 +24,16 @@ pub fn run(a: &Ros2Args<'_>) -> Result<()> {
         Some(r) => format!("scenario {} has no robot {r}", s.name),
         None => format!("scenario {} has no robot", s.name),
     })?;
+    let robot = &crate::run_cmd::with_sensors(robot, a.add_sensors)?;
     let duration = a.duration.unwrap_or(radarnav::limits::DURATION.max);
-    let topics: Vec<String> = robot
-        .sensors
-        .iter()
-        .map(|x| format!("/scan/{}", radarnav::record::frames::ros_name(&x.name)))
-        .collect();
+    let mut topics = Vec::new();
+    for x in &robot.sensors {
+        let token = radarnav::record::frames::ros_name(&x.name);
+        topics.push(format!("/scan/{token}"));
+        if x.config.signal.image.is_some() && x.config.range_bin.is_some() {
+            topics.push(format!("/radar/{token}/image /radar/{token}/points"));
+        }
+    }
     eprintln!(
         "ROS 2 node /radarnav on domain {}: {} at {}x real time; publishing /clock /tf \
          /tf_static /odom {}{}; driven by /cmd_vel (geometry_msgs/Twist); Ctrl-C stops",

@@ -191,7 +191,7 @@ pub struct RunArgs<'a> {
 }
 
 /// `robot` with the presets `names` added (see [`Robot::with_preset_mount`]).
-fn with_sensors(robot: &Robot, names: &[String]) -> Result<Robot> {
+pub fn with_sensors(robot: &Robot, names: &[String]) -> Result<Robot> {
     let mut r = robot.clone();
     for name in names {
         if r.sensor(name).is_some() {

@@ -6,7 +6,8 @@
 //!
 //! Topics (messages built by [`crate::record::ros2::convert`], as in the bag):
 //! `/clock`, `/tf` (every step and every scan between steps), `/tf_static` (transient local),
-//! `/odom`, `/scan/<sensor>`, `/echoes/<sensor>` (multi-echo sensors) and, with maps,
+//! `/odom`, `/scan/<sensor>`, `/echoes/<sensor>` (multi-echo sensors), `/radar/<sensor>/image`
+//! and `/radar/<sensor>/points` (imaging radars, each rotation) and, with maps,
 //! `/map/<sensor>` every simulated second. `/cmd_vel` sets (v, ω) until the next one; the
 //! vehicle's limits apply.
 
@@ -23,6 +24,7 @@ use thiserror::Error;
 use crate::map::{MapConfig, MapError, Mapper};
 use crate::mission::Remote;
 use crate::record::frames;
+use crate::record::radar_images::RadarImager;
 use crate::record::ros2::{convert, msg};
 use crate::scenario::{Robot, Scenario};
 use crate::sim::{Observer, RunSettings, ScanEvent, SimError, Simulation, Step};
@@ -102,17 +104,20 @@ struct SensorPubs {
     scan_time: f64,
     scan: Publisher<msg::LaserScan>,
     echoes: Option<Publisher<msg::PointCloud2>>,
+    /// An imaging radar's image and detections.
+    radar: Option<(Publisher<msg::Image>, Publisher<msg::PointCloud2>)>,
 }
 
 /// Publishes what the simulation produces.
-struct Publish<'a> {
+struct Publish<'a, 'w> {
     pubs: &'a Pubs,
     maps: &'a mut [Mapper],
+    images: Option<RadarImager<'w>>,
     last_tf: Option<u64>,
     failed: Option<String>,
 }
 
-impl Publish<'_> {
+impl Publish<'_, '_> {
     fn send<M: Serialize + std::fmt::Debug>(&mut self, p: &Publisher<M>, m: M) {
         // A full queue or a vanished peer is the peers' concern: the node goes on, and
         // says once why a message was lost.
@@ -132,7 +137,7 @@ impl Publish<'_> {
     }
 }
 
-impl Observer for Publish<'_> {
+impl Observer for Publish<'_, '_> {
     type Error = std::convert::Infallible;
 
     fn on_step(&mut self, step: &Step) -> Result<(), Self::Error> {
@@ -141,6 +146,19 @@ impl Observer for Publish<'_> {
         self.tf(ns, &step.truth, &step.odometry);
         self.send(&self.pubs.odom, convert::odometry(ns, step));
         let Ok(()) = self.maps.on_step(step);
+        let sweeps = match &mut self.images {
+            Some(imager) => imager.on_step(step),
+            None => Vec::new(),
+        };
+        for sweep in &sweeps {
+            let pubs = self.pubs;
+            let s = &pubs.scans[sweep.sensor];
+            if let Some((image, points)) = &s.radar {
+                let (_, i, p) = convert::radar_image(sweep, &s.frame);
+                self.send(image, i);
+                self.send(points, p);
+            }
+        }
         Ok(())
     }
 
@@ -156,6 +174,9 @@ impl Observer for Publish<'_> {
             self.send(p, convert::echoes(scan, &s.frame));
         }
         let Ok(()) = self.maps.on_scan(event);
+        if let Some(imager) = &mut self.images {
+            imager.on_scan(event.sensor, scan.stamp);
+        }
         Ok(())
     }
 }
@@ -208,7 +229,27 @@ pub fn run(
                 10,
             )?)
         };
-        sensor_topics.push((scan, echoes));
+        let radar = if s.config.signal.image.is_some() && s.config.range_bin.is_some() {
+            Some((
+                topic(
+                    name(&format!("/radar/{token}"), "image")?,
+                    "sensor_msgs",
+                    "Image",
+                    false,
+                    2,
+                )?,
+                topic(
+                    name(&format!("/radar/{token}"), "points")?,
+                    "sensor_msgs",
+                    "PointCloud2",
+                    false,
+                    2,
+                )?,
+            ))
+        } else {
+            None
+        };
+        sensor_topics.push((scan, echoes, radar));
     }
     let mut mappers = Vec::new();
     let mut map_topics = Vec::new();
@@ -239,7 +280,7 @@ pub fn run(
             .sensors
             .iter()
             .zip(&sensor_topics)
-            .map(|(s, (scan, echoes))| {
+            .map(|(s, (scan, echoes, radar))| {
                 Ok(SensorPubs {
                     frame: frames::sensor_frame(&s.name),
                     plane: frames::horizontal_plane(&s.config.elevations),
@@ -247,6 +288,13 @@ pub fn run(
                     scan: node
                         .create_publisher(scan, None)
                         .map_err(ros("publisher"))?,
+                    radar: match radar {
+                        Some((i, p)) => Some((
+                            node.create_publisher(i, None).map_err(ros("publisher"))?,
+                            node.create_publisher(p, None).map_err(ros("publisher"))?,
+                        )),
+                        None => None,
+                    },
                     echoes: match echoes {
                         Some(t) => Some(node.create_publisher(t, None).map_err(ros("publisher"))?),
                         None => None,
@@ -282,6 +330,7 @@ pub fn run(
         let mut publish = Publish {
             pubs: &pubs,
             maps: &mut mappers,
+            images: RadarImager::new(&scenario.world, robot, options.seed),
             last_tf: None,
             failed: None,
         };
