@@ -785,10 +785,7 @@ fn scan(
     pixels: u32,
 ) -> Result<()> {
     let s = load(scenario)?;
-    let r = s.robot(robot).with_context(|| match robot {
-        Some(n) => format!("scenario `{}` has no robot `{n}`", s.name),
-        None => format!("scenario `{}` has no robot", s.name),
-    })?;
+    let r = run_cmd::robot_of(&s, robot)?;
     let mounted = match r.sensor(sensor) {
         Some(m) => m.clone(),
         None => r.with_preset_mount(sensor).with_context(|| {

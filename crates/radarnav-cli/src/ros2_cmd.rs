@@ -17,13 +17,9 @@ pub struct Ros2Args<'a> {
 /// Runs the node until Ctrl-C or the duration.
 #[cfg(feature = "ros2")]
 pub fn run(a: &Ros2Args<'_>) -> Result<()> {
-    use anyhow::Context;
     use radarnav::ros2_node::{LiveOptions, run};
     let s = a.scenario;
-    let robot = s.robot(a.robot).with_context(|| match a.robot {
-        Some(r) => format!("scenario {} has no robot {r}", s.name),
-        None => format!("scenario {} has no robot", s.name),
-    })?;
+    let robot = crate::run_cmd::robot_of(s, a.robot)?;
     let robot = &crate::run_cmd::with_sensors(robot, a.add_sensors)?;
     let duration = a.duration.unwrap_or(radarnav::limits::DURATION.max);
     let mut topics = Vec::new();

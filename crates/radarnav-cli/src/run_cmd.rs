@@ -39,10 +39,7 @@ pub fn plan<'a>(
 ) -> Result<Plan<'a>> {
     let mission_robot = s.mission.as_ref().and_then(|m| m.robot.as_deref());
     let name = robot.or(mission_robot);
-    let r = s.robot(name).with_context(|| match name {
-        Some(n) => format!("scenario `{}` has no robot `{n}`", s.name),
-        None => format!("scenario `{}` has no robot", s.name),
-    })?;
+    let r = robot_of(s, name)?;
     let read_csv = |path: &Path| -> Result<Box<dyn Controller>> {
         let src = radarnav::limits::read_text(path)
             .with_context(|| format!("reading teleop file {}", path.display()))?;
@@ -188,6 +185,14 @@ pub struct RunArgs<'a> {
     pub budget: Budget,
     /// Set by a signal: the run ends at the end of the step and its files are finished.
     pub stop: &'a AtomicBool,
+}
+
+/// The scenario's robot `name` (default: the first), or an error naming what is missing.
+pub fn robot_of<'s>(s: &'s Scenario, name: Option<&str>) -> Result<&'s Robot> {
+    s.robot(name).with_context(|| match name {
+        Some(n) => format!("scenario `{}` has no robot `{n}`", s.name),
+        None => format!("scenario `{}` has no robot", s.name),
+    })
 }
 
 /// `robot` with the presets `names` added (see [`Robot::with_preset_mount`]).

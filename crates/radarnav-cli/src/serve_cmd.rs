@@ -15,10 +15,7 @@ pub fn run(
     port: u16,
     speed: f64,
 ) -> Result<()> {
-    let template = scenario.robot(robot).with_context(|| match robot {
-        Some(r) => format!("scenario {} has no robot {r}", scenario.name),
-        None => format!("scenario {} has no robot to serve", scenario.name),
-    })?;
+    let template = crate::run_cmd::robot_of(scenario, robot)?;
     let listener =
         TcpListener::bind((bind, port)).with_context(|| format!("listening on {bind}:{port}"))?;
     let addr = listener.local_addr().context("listening socket")?;
