@@ -254,8 +254,19 @@ pub fn run(
     let mut mappers = Vec::new();
     let mut map_topics = Vec::new();
     if options.maps {
+        let config = MapConfig::default();
+        // As `run`'s maps: the world's bounds grown by the sensors' reach, so a robot driven
+        // away for hours cannot grow a map without bound.
+        let region = crate::limits::budget::map_region(
+            &scenario.world,
+            robot,
+            config.max_free_range,
+            config.max_range,
+        );
         for s in &robot.sensors {
-            mappers.push(Mapper::from_spec(&s.name, robot, MapConfig::default())?);
+            let mut m = Mapper::from_spec(&s.name, robot, config)?;
+            m.limit_to(region);
+            mappers.push(m);
             let token = frames::ros_name(&s.name);
             map_topics.push(topic(
                 name("/map", &token)?,

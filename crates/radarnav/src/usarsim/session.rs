@@ -351,7 +351,6 @@ impl<'a> Driving<'a> {
     fn conf(&self, m: &Message) -> Option<String> {
         let kind = m.get("Type").unwrap_or("Robot");
         let name = m.get("Name").unwrap_or_default();
-        let v = self.robot.vehicle;
         if kind == "Robot" {
             return Some(format!(
                 "CONF {{Name {CLASS_NAME}}} {{Type GroundVehicle}} {{SteeringType SkidSteered}} \
@@ -359,8 +358,7 @@ impl<'a> Driving<'a> {
                 float_string(P3AT_MASS, 4),
                 float_string(MAX_WHEEL_SPIN, 4),
                 float_string(P3AT_MAX_TORQUE, 4),
-            ))
-            .filter(|_| v.wheel_radius > 0.0);
+            ));
         }
         let parts = self.parts(kind, name, |s| {
             let c = &s.config;
