@@ -294,7 +294,7 @@ pub fn run(
             .map(|(s, (scan, echoes, radar))| {
                 Ok(SensorPubs {
                     frame: frames::sensor_frame(&s.name),
-                    plane: frames::horizontal_plane(&s.config.elevations),
+                    plane: s.config.horizontal_plane(),
                     scan_time: 1.0 / s.config.rate_hz,
                     scan: node
                         .create_publisher(scan, None)

@@ -44,16 +44,6 @@ pub fn map_to_odom(truth: &Pose, odometry: &Pose) -> Pose {
     truth.compose(&odometry.inverse())
 }
 
-/// The index of the plane a planar topic carries of a sensor with `elevations` (radians):
-/// the one closest to horizontal.
-pub fn horizontal_plane(elevations: &[f64]) -> usize {
-    elevations
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-        .map_or(0, |(i, _)| i)
-}
-
 /// ROS occupancy of a map class: -1 unknown, 0 free, 100 for anything the robot cannot
 /// cross (an obstacle, or foliage seen through but impassable: both lethal to a planner).
 pub fn occupancy(class: CellClass) -> i8 {
@@ -157,11 +147,5 @@ mod tests {
         assert_eq!(ros_name("front laser-2"), "front_laser_2");
         assert_eq!(ros_name("2d"), "_2d");
         assert_eq!(ros_name(""), "_");
-    }
-
-    #[test]
-    fn the_planar_topic_takes_the_plane_nearest_horizontal() {
-        assert_eq!(horizontal_plane(&[-0.2, 0.05, 0.3]), 1);
-        assert_eq!(horizontal_plane(&[]), 0);
     }
 }

@@ -215,7 +215,7 @@ impl<W: Write + Seek> McapLog<W> {
             } else {
                 None
             });
-            scans.push((id, frames::horizontal_plane(&s.config.elevations)));
+            scans.push((id, s.config.horizontal_plane()));
         }
         let path = channel(&format!("/{name}/path"), PosesInFrame::get_schema())?;
         let mut log = Self {

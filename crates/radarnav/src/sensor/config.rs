@@ -298,6 +298,16 @@ impl SensorConfig {
         -self.fov / 2.0
     }
 
+    /// The plane closest to horizontal: the one a planar output (a LaserScan, a USARSim
+    /// RangeScanner) carries of a sensor with several.
+    pub fn horizontal_plane(&self) -> usize {
+        self.elevations
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .map_or(0, |(i, _)| i)
+    }
+
     /// Range noise σ at `range`.
     pub fn noise_sigma(&self, range: f64) -> f64 {
         self.range_noise_std.max(self.range_noise_rel * range)
@@ -396,6 +406,15 @@ mod tests {
         assert_eq!(count("sick_lms291"), 181);
         assert_eq!(count("usarsim_hokuyo"), 228);
         assert_eq!(count("usarsim_sick"), 181);
+    }
+
+    #[test]
+    fn the_planar_output_takes_the_plane_nearest_horizontal() {
+        let mut c = preset("hokuyo_utm30lx").expect("preset");
+        c.elevations = vec![-0.2, 0.05, 0.3];
+        assert_eq!(c.horizontal_plane(), 1);
+        c.elevations.clear();
+        assert_eq!(c.horizontal_plane(), 0);
     }
 
     #[test]

@@ -182,12 +182,7 @@ pub fn range_scanner(name: &str, config: &SensorConfig, scan: &Scan, time: f64) 
     } else {
         1
     };
-    let plane = scan
-        .elevations
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-        .map_or(0, |(i, _)| i);
+    let plane = config.horizontal_plane();
     let mut ranges = String::with_capacity(count * 6);
     for i in 0..count {
         // USARSim's reading i looks FOV/2 - i·Res clockwise: radarnav's -FOV/2 + i·Res.
@@ -228,7 +223,6 @@ pub struct Driving<'a> {
     /// Server time at the robot's start, s: message times are server times.
     time_offset: f64,
     next_report: f64,
-    dt: f64,
 }
 
 impl<'a> Driving<'a> {
@@ -259,7 +253,6 @@ impl<'a> Driving<'a> {
             odometry_origin,
             time_offset,
             next_report: 0.0,
-            dt,
         })
     }
 
@@ -271,11 +264,6 @@ impl<'a> Driving<'a> {
     /// Server time at the robot's start, s.
     pub fn start_time(&self) -> f64 {
         self.time_offset
-    }
-
-    /// The step, s.
-    pub fn dt(&self) -> f64 {
-        self.dt
     }
 
     /// The true pose.

@@ -181,7 +181,7 @@ impl<W: Write + Seek> Ros2Bag<W> {
             };
             bag.sensors.push(SensorTopics {
                 frame: frames::sensor_frame(&s.name),
-                plane: frames::horizontal_plane(&s.config.elevations),
+                plane: s.config.horizontal_plane(),
                 scan_time: 1.0 / s.config.rate_hz,
                 scan,
                 echoes,
