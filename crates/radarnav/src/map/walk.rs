@@ -5,15 +5,14 @@
 
 use glam::DVec2;
 
+use crate::world::floor_i64;
+
 /// A cell index `(column, row)` in the global lattice.
 pub type CellIndex = (i64, i64);
 
 /// The cell holding point `p` for cells of size `resolution`.
 pub fn cell_of(p: DVec2, resolution: f64) -> CellIndex {
-    (
-        (p.x / resolution).floor() as i64,
-        (p.y / resolution).floor() as i64,
-    )
+    (floor_i64(p.x / resolution), floor_i64(p.y / resolution))
 }
 
 /// The cells a segment passes through, in order from the cell of its start to the cell of its
@@ -193,6 +192,28 @@ mod tests {
                 prop_assert_eq!(w[0].0.abs_diff(w[1].0) + w[0].1.abs_diff(w[1].1), 1);
             }
             prop_assert_eq!(walk, crossed(a, b, r));
+        }
+
+        /// The mapper's loop visits the iterator's cells, as storage indices, for any number
+        /// of cells asked (the end cell left out, all of them, more than there are, none).
+        #[test]
+        fn indices_equal_the_iterator(
+            ax in -5.0..5.0f64, ay in -5.0..5.0f64,
+            bx in -5.0..5.0f64, by in -5.0..5.0f64,
+            r in prop::sample::select(vec![0.05, 0.1, 0.37, 1.0]),
+            extra in 0usize..3,
+            drop in 0usize..3,
+        ) {
+            let (a, b) = (DVec2::new(ax, ay), DVec2::new(bx, by));
+            let cells: Vec<CellIndex> = CellWalk::new(a, b, r).collect();
+            let origin = (-300, -300);
+            let width = 600usize;
+            let index = |c: CellIndex| ((c.1 - origin.1) * width as i64 + (c.0 - origin.0)) as usize;
+            let n = (cells.len() + extra).saturating_sub(drop);
+            let mut got = Vec::new();
+            CellWalk::new(a, b, r).for_each_index(n, origin, width, |k| got.push(k));
+            let want: Vec<usize> = cells.iter().take(n).map(|&c| index(c)).collect();
+            prop_assert_eq!(got, want);
         }
     }
 }

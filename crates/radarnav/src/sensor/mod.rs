@@ -323,9 +323,11 @@ impl SensorConfig {
         let mut fan = std::mem::take(&mut tracer.fan);
         let fan_ok = !side_beams && self.scan_fan(world, pose, n, &mut fan);
         let fan_ref = fan_ok.then_some(&fan);
-        let trace = |tracer: &mut Tracer, i: usize| {
-            let (az, _) = out.angles(i);
-            let el = plane_sin_cos[i / azimuths];
+        // Ray `i` is azimuth `k` of plane `plane` (the serial loop below counts them rather
+        // than divide per ray).
+        let trace = |tracer: &mut Tracer, i: usize, plane: usize, k: usize| {
+            let az = out.angle_min + k as f64 * out.angle_increment;
+            let el = plane_sin_cos[plane];
             let ray = beam_ray(pose, az, el, draws[i].0.side() * out.side_beam_offset);
             if let Some(&e) = optical.get(i) {
                 let fan = fan_ref.map(|f| (f, pose.yaw + az));
@@ -349,10 +351,16 @@ impl SensorConfig {
             (0..n)
                 .into_par_iter()
                 .with_min_len(PARALLEL_CHUNK)
-                .map(|i| with_pool_tracer(|t| trace(t, i)))
+                .map(|i| with_pool_tracer(|t| trace(t, i, i / azimuths, i % azimuths)))
                 .collect()
         } else {
-            (0..n).map(|i| trace(tracer, i)).collect()
+            let mut returns = Vec::with_capacity(n);
+            for plane in 0..self.elevations.len() {
+                for k in 0..azimuths {
+                    returns.push(trace(tracer, plane * azimuths + k, plane, k));
+                }
+            }
+            returns
         };
         tracer.fan = fan;
         for (ret, (beam, noise)) in returns.iter().zip(draws) {

@@ -142,6 +142,32 @@ impl Tracer {
             f64::INFINITY
         };
         let reach = t_max.min(t_ground);
+        if optical_depth.is_none() && world.is_binary(band) {
+            // Nothing to spend a budget in: the ray ends at its first solid entry, exactly
+            // where the walk below would end it.
+            if let Some(iv) = world.first_solid(fan, ray, reach, band, &mut self.query)
+                && iv.t_in.max(0.0) < reach
+            {
+                return Return {
+                    range: iv.t_in.max(0.0),
+                    kind: HitKind::Solid,
+                    material: Some(iv.material),
+                };
+            }
+            return if t_ground <= t_max {
+                Return {
+                    range: t_ground,
+                    kind: HitKind::Solid,
+                    material: Some(world.ground_material()),
+                }
+            } else {
+                Return {
+                    range: f64::INFINITY,
+                    kind: HitKind::None,
+                    material: None,
+                }
+            };
+        }
         let mut intervals = match fan {
             Some((fan, heading)) => {
                 world.fan_intervals(fan, ray, heading, reach, Some(band), &mut self.query)
@@ -527,6 +553,41 @@ mod tests {
                     let whole =
                         walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
                     proptest::prop_assert_eq!(fanned, whole, "{:?} heading {} {:?}", ray, heading, band);
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// In a world whose materials are all solid or transparent, every band takes the
+        /// first-solid query (along the grid, and through a fan) instead of the walk, and
+        /// ends every ray exactly where the walk over the exhaustive list does: origins
+        /// inside objects, rays along the axes and on cell boundaries, any budget.
+        #[test]
+        fn first_solid_trace_equals_walk_over_exhaustive_intervals(
+            w in crate::world::strategies::arb_binary_world(),
+            rays in proptest::collection::vec(crate::world::strategies::arb_hard_ray(), 1..16),
+            sectors in prop_oneof![Just(1usize), 1usize..5000],
+            budget in prop_oneof![Just(0.0), 0.0..12.0f64, Just(f64::INFINITY)],
+            t_max in 0.5..40.0f64,
+        ) {
+            let (mut tr, mut q, mut active) = (Tracer::default(), RayQuery::default(), Vec::new());
+            let mut fan = crate::world::Fan::default();
+            for band in [Band::Radar, Band::Laser, Band::Surface] {
+                proptest::prop_assert!(w.is_binary(band));
+            }
+            for ray in rays {
+                let ray = Ray { dir: DVec3::new(ray.dir.x, ray.dir.y, ray.dir.z.abs()), ..ray };
+                let heading = ray.dir.y.atan2(ray.dir.x);
+                proptest::prop_assert!(w.fan(ray.origin, t_max, sectors, usize::MAX, &mut fan));
+                for band in [Band::Radar, Band::Laser, Band::Surface] {
+                    let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
+                    let whole =
+                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
+                    let gridded = tr.trace(&w, &ray, band, budget, t_max);
+                    proptest::prop_assert_eq!(gridded, whole, "{:?} {:?}", ray, band);
+                    let fanned = tr.trace_in_fan(&w, &fan, heading, &ray, band, budget, t_max);
+                    proptest::prop_assert_eq!(fanned, whole, "{:?} {:?} fan", ray, band);
                 }
             }
         }

@@ -55,7 +55,7 @@ impl Fan {
 /// The sector of bearing `a` (`sectors` is a power of two); the same formula files the
 /// parts' spans.
 fn sector_of(a: f64, per_radian: f64, sectors: usize) -> usize {
-    sector_index((a * per_radian).floor() as i64, sectors)
+    sector_index(super::floor_i64(a * per_radian), sectors)
 }
 
 /// Sector `s` of the unwrapped sector numbers, `sectors` a power of two.

@@ -46,6 +46,15 @@ pub struct Interval {
     pub material: MaterialId,
 }
 
+/// `x.floor() as i64`, bit for bit (NaN gives 0, out-of-range values saturate), without the
+/// call to libm's `floor` that a baseline x86-64 build makes: cell and sector indices are
+/// taken once or twice per ray.
+#[inline]
+pub fn floor_i64(x: f64) -> i64 {
+    let i = x as i64;
+    i.saturating_sub(i64::from((i as f64) > x))
+}
+
 /// The order every interval list of a ray is in: by entry, then object index, then exit.
 fn entry_order(a: &Interval, b: &Interval) -> Ordering {
     a.t_in
@@ -281,6 +290,8 @@ pub struct World {
     ground: MaterialId,
     /// Whether some object is an aerosol to a laser (§7.6).
     laser_aerosols: bool,
+    /// Bit `band_bit(b)` set when every object is solid or transparent to band `b`.
+    binary: u8,
     /// Per material, the one-way dB a radar ray loses crossing its surface, 10·log10(1/(1−ρ)).
     transmission_db: Vec<f64>,
 }
@@ -337,6 +348,16 @@ impl World {
         let laser_aerosols = objects
             .iter()
             .any(|o| materials.get(o.material).laser_aerosol());
+        let binary = [Band::Radar, Band::Laser, Band::Surface]
+            .into_iter()
+            .filter(|b| {
+                objects.iter().all(|o| {
+                    let a = materials.get(o.material).attenuation_db_per_m(*b);
+                    a == 0.0 || a.is_infinite()
+                })
+            })
+            .map(band_bit)
+            .sum();
         let transmission_db = materials
             .iter()
             .map(|(_, m)| {
@@ -350,6 +371,7 @@ impl World {
             .collect();
         Self {
             laser_aerosols,
+            binary,
             transmission_db,
             materials,
             objects,
@@ -481,6 +503,34 @@ impl World {
     // Inlined into both callers: the call's own frame cost about a tenth of a forest ray.
     #[inline(always)]
     fn test_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
+        let pending = &mut q.intervals;
+        let take = |iv: Interval| insert_pending(pending, iv);
+        self.test_part_with(
+            part,
+            ray,
+            t_max,
+            by_parts,
+            &mut q.stamps,
+            q.stamp,
+            &mut q.spans,
+            take,
+        );
+    }
+
+    /// [`World::test_part`] handing each interval to `take` instead of filing it.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn test_part_with(
+        &self,
+        part: u32,
+        ray: &Ray,
+        t_max: f64,
+        by_parts: u8,
+        stamps: &mut [u32],
+        stamp: u32,
+        spans: &mut Vec<(f64, f64)>,
+        mut take: impl FnMut(Interval),
+    ) {
         let Part {
             object,
             segment,
@@ -489,21 +539,18 @@ impl World {
         } = self.parts[part as usize];
         if let Some((center, radius)) = sphere {
             // The commonest object of forests, in one piece: its slot is the object's.
-            if q.stamps[object as usize] != q.stamp {
-                q.stamps[object as usize] = q.stamp;
+            if stamps[object as usize] != stamp {
+                stamps[object as usize] = stamp;
                 if let Some((t_in, t_out)) = sphere_interval(center, radius, ray)
                     && t_out > 0.0
                     && t_in < t_max
                 {
-                    insert_pending(
-                        &mut q.intervals,
-                        Interval {
-                            t_in,
-                            t_out,
-                            object,
-                            material,
-                        },
-                    );
+                    take(Interval {
+                        t_in,
+                        t_out,
+                        object,
+                        material,
+                    });
                 }
             }
             return;
@@ -514,12 +561,10 @@ impl World {
         } else {
             object as usize
         };
-        if q.stamps[slot] == q.stamp {
+        if stamps[slot] == stamp {
             return;
         }
-        q.stamps[slot] = q.stamp;
-        let pending = &mut q.intervals;
-        let mut insert = |iv: Interval| insert_pending(pending, iv);
+        stamps[slot] = stamp;
         if by_part {
             let obj = &self.objects[object as usize];
             let Shape::Wall { segments, .. } = &obj.shape else {
@@ -530,14 +575,14 @@ impl World {
                 // (in a segment behind the origin), and among objects the ray starts in, the
                 // one entered first is reported. Only the whole wall gives that entry.
                 Some((t_in, t_out))
-                    if t_in <= 0.0 && t_out > 0.0 && q.stamps[object as usize] != q.stamp =>
+                    if t_in <= 0.0 && t_out > 0.0 && stamps[object as usize] != stamp =>
                 {
-                    q.stamps[object as usize] = q.stamp;
-                    self.object_intervals(object, ray, t_max, &mut q.spans, insert);
+                    stamps[object as usize] = stamp;
+                    self.object_intervals(object, ray, t_max, spans, take);
                 }
                 // Its merged intervals are filed already.
                 Some((t_in, t_out)) if t_in <= 0.0 && t_out > 0.0 => {}
-                Some((t_in, t_out)) if t_out > 0.0 && t_in < t_max => insert(Interval {
+                Some((t_in, t_out)) if t_out > 0.0 && t_in < t_max => take(Interval {
                     t_in,
                     t_out,
                     object,
@@ -546,8 +591,93 @@ impl World {
                 _ => {}
             }
         } else {
-            self.object_intervals(object, ray, t_max, &mut q.spans, insert);
+            self.object_intervals(object, ray, t_max, spans, take);
         }
+    }
+
+    /// Tests part `part` for [`World::first_solid`] (objects not solid to band bit `bit` are
+    /// skipped) and keeps in `best` whichever interval comes first in entry order.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn keep_first_solid(
+        &self,
+        part: u32,
+        ray: &Ray,
+        t_max: f64,
+        bit: u8,
+        stamps: &mut [u32],
+        stamp: u32,
+        spans: &mut Vec<(f64, f64)>,
+        best: &mut Option<Interval>,
+    ) {
+        if self.solid[self.parts[part as usize].object as usize] & bit == 0 {
+            return;
+        }
+        let keep = |iv: Interval| {
+            if best.is_none_or(|b| entry_order(&iv, &b) == Ordering::Less) {
+                *best = Some(iv);
+            }
+        };
+        self.test_part_with(part, ray, t_max, bit, stamps, stamp, spans, keep);
+    }
+
+    /// Whether every object is either solid or fully transparent to `band` (attenuation
+    /// infinite or zero): then a ray without aerosol draws ends at its first solid entry, and
+    /// [`World::first_solid`] finds it without the penetration walk.
+    pub fn is_binary(&self, band: Band) -> bool {
+        self.binary & band_bit(band) != 0
+    }
+
+    /// The first interval, in entry order, of an object solid to `band` that `ray` meets
+    /// before `t_max`: the interval a walk of [`World::ordered_intervals`] stops at when every
+    /// other object is transparent to `band` ([`World::is_binary`]). Through `fan` (its
+    /// origin the ray's, with the ray's bearing) when given, else along the grid. Objects
+    /// transparent to `band` are not tested at all.
+    pub fn first_solid(
+        &self,
+        fan: Option<(&Fan, f64)>,
+        ray: &Ray,
+        t_max: f64,
+        band: Band,
+        q: &mut RayQuery,
+    ) -> Option<Interval> {
+        q.next_ray(self.objects.len() + self.parts.len());
+        let bit = band_bit(band);
+        let mut best: Option<Interval> = None;
+        let (stamps, stamp, spans) = (&mut q.stamps, q.stamp, &mut q.spans);
+        let mut test = |part: u32, best: &mut Option<Interval>| {
+            self.keep_first_solid(part, ray, t_max, bit, stamps, stamp, spans, best);
+        };
+        match fan {
+            Some((fan, heading)) => {
+                debug_assert_eq!(ray.origin, fan.origin());
+                for &(lower, part) in fan.candidates(heading) {
+                    // The rest begin at or after `lower`: past the best entry they cannot come
+                    // first. A lower bound of 0 may hide an interval that began behind the
+                    // origin (as in `OrderedIntervals`), so it is always tested.
+                    if let Some(b) = best
+                        && lower > 0.0
+                        && lower > b.t_in
+                    {
+                        break;
+                    }
+                    test(part, &mut best);
+                }
+            }
+            None => {
+                let mut walk = CellWalk::new(&self.grid, ray, t_max);
+                while let Some((cell, t_exit)) = walk.next_cell(&self.grid) {
+                    for &part in self.grid.cell(cell) {
+                        test(part, &mut best);
+                    }
+                    // Every interval beginning before the cell's exit has been found.
+                    if best.is_some_and(|b| b.t_in < t_exit) {
+                        break;
+                    }
+                }
+            }
+        }
+        best
     }
 
     /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`.
@@ -769,6 +899,41 @@ pub(crate) mod strategies {
             World::new(table, objects)
         })
     }
+
+    /// [`arb_world`] of materials that are solid or transparent to every band only, so that
+    /// every band takes [`World::first_solid`]'s way.
+    pub(crate) fn arb_binary_world() -> impl Strategy<Value = World> {
+        let table = MaterialTable::default();
+        let binary: Vec<u16> = table
+            .iter()
+            .filter(|(_, m)| {
+                [Band::Radar, Band::Laser, Band::Surface].iter().all(|b| {
+                    let a = m.attenuation_db_per_m(*b);
+                    a == 0.0 || a.is_infinite()
+                })
+            })
+            .map(|(id, _)| id.0)
+            .collect();
+        assert!(
+            binary.len() >= 2,
+            "built-ins solid or transparent to all bands"
+        );
+        let objects = prop_oneof![
+            prop::collection::vec((arb_shape(), 0..binary.len()), 1..40),
+            prop::collection::vec((arb_small_shape(), 0..binary.len()), 50..400),
+        ];
+        objects.prop_map(move |objects| {
+            let objects = objects
+                .into_iter()
+                .map(|(shape, m)| Object {
+                    name: None,
+                    shape,
+                    material: MaterialId(binary[m]),
+                })
+                .collect();
+            World::new(MaterialTable::default(), objects)
+        })
+    }
 }
 
 #[cfg(test)]
@@ -883,6 +1048,51 @@ mod tests {
                 found.sort_unstable();
                 prop_assert_eq!(found, inside);
             }
+        }
+    }
+
+    #[test]
+    fn floor_i64_is_floor_as_i64() {
+        let edge = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            1e-300,
+            -1e-300,
+            4503599627370495.5,
+            -4503599627370495.5,
+            9.3e18,
+            -9.3e18,
+            // Just inside i64 (2^63 − 1024), its lower end, and just below it.
+            (i64::MAX - 1023) as f64,
+            i64::MIN as f64,
+            i64::MIN as f64 - 2048.0,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut x = 0x1234_5678_9abc_def0_u64;
+        let random = (0..100_000).map(|_| {
+            // xorshift: any bit pattern, NaNs and infinities included.
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            f64::from_bits(x)
+        });
+        for v in edge.into_iter().chain(random) {
+            assert_eq!(floor_i64(v), v.floor() as i64, "{v:e}");
+        }
+        for k in -2000..2000 {
+            let v = f64::from(k) * 0.05;
+            assert_eq!(floor_i64(v), v.floor() as i64, "{v}");
+            assert_eq!(floor_i64(v / 0.05), (v / 0.05).floor() as i64, "{v}");
         }
     }
 
