@@ -323,9 +323,11 @@ fn main() {
     // One run's simulation forks a few scans per controller period. With the main thread one
     // of the pool's threads, that fork runs partly here instead of waking the pool and
     // sleeping until it is done (a futex round trip per period): `bench foliage-wall --sim
-    // 600` ran about 40 % faster. Commands that run many runs at once keep rayon's default
-    // pool, which shares whole runs better (`compare` took 15 % longer the other way).
-    if !cli.command.runs_batches() {
+    // 600` ran about 40 % faster. Only commands that simulate on the main thread: commands
+    // that run many runs at once keep rayon's default pool, which shares whole runs better
+    // (`compare` took 15 % longer the other way), and a server's clients simulate on their own
+    // threads, whose forks must find a pool thread that is not blocked outside rayon.
+    if cli.command.simulates_on_main_thread() {
         // If a pool exists already, rayon keeps it.
         let _ = rayon::ThreadPoolBuilder::new()
             .use_current_thread()
@@ -346,11 +348,12 @@ fn main() {
 }
 
 impl Command {
-    /// Whether the command runs batches of simulations side by side (see `main`).
-    fn runs_batches(&self) -> bool {
+    /// Whether the command runs one simulation (or scan) at a time on the main thread (see
+    /// `main`).
+    fn simulates_on_main_thread(&self) -> bool {
         matches!(
             self,
-            Command::Demo { .. } | Command::Compare { .. } | Command::NavSuite { .. }
+            Command::Run { .. } | Command::Bench { .. } | Command::Scan { .. }
         )
     }
 }
