@@ -49,6 +49,15 @@ pub struct Return {
     pub material: Option<MaterialId>,
 }
 
+impl Return {
+    /// No return within range.
+    pub const NONE: Return = Return {
+        range: f64::INFINITY,
+        kind: HitKind::None,
+        material: None,
+    };
+}
+
 /// A volume a ray is inside: (exit distance, dB/m, material, aerosol extinction 1/m).
 type Active = (f64, f64, MaterialId, f64);
 
@@ -142,47 +151,34 @@ impl Tracer {
             f64::INFINITY
         };
         let reach = t_max.min(t_ground);
-        if optical_depth.is_none() && world.is_binary(band) {
+        let ret = if optical_depth.is_none() && world.is_binary(band) {
             // Nothing to spend a budget in: the ray ends at its first solid entry, exactly
             // where the walk below would end it.
-            if let Some(iv) = world.first_solid(fan, ray, reach, band, &mut self.query)
-                && iv.t_in.max(0.0) < reach
-            {
-                return Return {
+            match world.first_solid(fan, ray, reach, band, &mut self.query) {
+                Some(iv) if iv.t_in.max(0.0) < reach => Return {
                     range: iv.t_in.max(0.0),
                     kind: HitKind::Solid,
                     material: Some(iv.material),
-                };
+                },
+                _ => Return::NONE,
             }
-            return if t_ground <= t_max {
-                Return {
-                    range: t_ground,
-                    kind: HitKind::Solid,
-                    material: Some(world.ground_material()),
+        } else {
+            let mut intervals = match fan {
+                Some((fan, heading)) => {
+                    world.fan_intervals(fan, ray, heading, reach, Some(band), &mut self.query)
                 }
-            } else {
-                Return {
-                    range: f64::INFINITY,
-                    kind: HitKind::None,
-                    material: None,
-                }
+                None => world.ordered_intervals(ray, reach, Some(band), &mut self.query),
             };
-        }
-        let mut intervals = match fan {
-            Some((fan, heading)) => {
-                world.fan_intervals(fan, ray, heading, reach, Some(band), &mut self.query)
-            }
-            None => world.ordered_intervals(ray, reach, Some(band), &mut self.query),
+            walk(
+                &mut intervals,
+                world,
+                band,
+                budget_db,
+                reach,
+                optical_depth,
+                &mut self.active,
+            )
         };
-        let ret = walk(
-            &mut intervals,
-            world,
-            band,
-            budget_db,
-            reach,
-            optical_depth,
-            &mut self.active,
-        );
         if ret.kind == HitKind::None && t_ground <= t_max {
             return Return {
                 range: t_ground,
@@ -261,11 +257,7 @@ fn walk(
             if cost >= budget {
                 if optical_depth.is_some() {
                     // Too weak for the link budget: lost.
-                    return Return {
-                        range: f64::INFINITY,
-                        kind: HitKind::None,
-                        material: None,
-                    };
+                    return Return::NONE;
                 }
                 let densest = active.iter().max_by(|a, b| a.1.total_cmp(&b.1));
                 return Return {
@@ -278,11 +270,7 @@ fn walk(
         }
         t = t_next;
         if t >= t_max {
-            return Return {
-                range: f64::INFINITY,
-                kind: HitKind::None,
-                material: None,
-            };
+            return Return::NONE;
         }
         match entry {
             Some(iv) if t_entry <= t_exit => {
