@@ -190,21 +190,19 @@ impl EchoTracer {
         model: &EchoModel,
         out: &mut Vec<Echo>,
     ) -> f64 {
-        let mut first_cos = None;
         self.legs.clear();
-        self.legs.push(Leg {
+        let direct = Leg {
             ray: *ray,
             path: 0.0,
-            loss_db: -to_db(weight),
+            // A beam of one ray weighs 1: −0 dB (as `-to_db(1.0)` gives) without the log.
+            loss_db: if weight == 1.0 { -0.0 } else { -to_db(weight) },
             bounces: 0,
             t_max,
-        });
+        };
+        // The direct leg first, then its mirrored legs, last found first.
+        let first_cos = self.walk_leg(world, fan, &direct, model, out);
         while let Some(leg) = self.legs.pop() {
-            let fan = fan.filter(|_| leg.bounces == 0);
-            let cos = self.walk_leg(world, fan, &leg, model, out);
-            if leg.bounces == 0 {
-                first_cos = cos;
-            }
+            self.walk_leg(world, None, &leg, model, out);
         }
         first_cos.unwrap_or(1.0)
     }
@@ -309,7 +307,7 @@ impl EchoTracer {
                     let a = m.attenuation_db_per_m(Band::Radar);
                     if iv.t_in > 0.0 {
                         let p = ray.at(t);
-                        let normal = world.objects()[iv.object as usize].shape.normal_at(p);
+                        let normal = world.normal_at(&iv, p);
                         let (cos, bounce) =
                             surface_echo(leg, normal, t, loss, m, iv.material, model, &mut |e| {
                                 emit(out, e)

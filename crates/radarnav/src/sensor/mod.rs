@@ -540,16 +540,30 @@ mod tests {
         let world = crate::world::forest::forest(300, 50.0, 4);
         let pose = Pose::new(0.0, 0.0, 0.4, 0.0);
         let mut tr = Tracer::default();
-        // Side beams (grid walk per ray), one origin (fan), first hit.
-        for name in ["radar_thesis_n100", "radar_thesis", "hokuyo_utm30lx"] {
-            let cfg = preset(name).unwrap();
+        // Side beams (grid walk per ray), one origin (fan), first hit, and the echo modes:
+        // every echo of one ray (echoes gathered per chunk of azimuths when parallel), and a
+        // 3 × 3 beam answered by its strongest ray.
+        let mut all = preset("radar_thesis").unwrap();
+        all.signal.return_mode = ReturnMode::All;
+        let configs = ["radar_thesis_n100", "radar_thesis", "hokuyo_utm30lx"]
+            .map(|name| preset(name).unwrap())
+            .into_iter()
+            .chain([all, preset("navtech_cts350x").unwrap()]);
+        for cfg in configs {
             let draws = cfg.draw(&world, &mut ChaCha8Rng::seed_from_u64(9));
             let mut scan = |min| cfg.trace_scan(&world, &pose, 0.0, &draws, &mut tr, min);
             let (serial, parallel) = (scan(usize::MAX), scan(1));
             assert!(
                 serial.hits.contains(&HitKind::Solid) || serial.hits.contains(&HitKind::Exhausted)
             );
-            assert_eq!(serial, parallel, "{name}");
+            if cfg.signal.return_mode == ReturnMode::All {
+                assert!(
+                    serial.echoes.len() > serial.ranges.len(),
+                    "{:?}",
+                    cfg.preset
+                );
+            }
+            assert_eq!(serial, parallel, "{:?}", cfg.preset);
         }
     }
 

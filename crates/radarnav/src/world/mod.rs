@@ -44,6 +44,14 @@ pub struct Interval {
     pub object: u32,
     /// The object's material.
     pub material: MaterialId,
+    /// The wall segment this stretch is inside, when the wall was tested segment by segment
+    /// (a wall solid to the ray's band); [`Interval::WHOLE`] for a whole object.
+    pub segment: u16,
+}
+
+impl Interval {
+    /// [`Interval::segment`] of an interval of a whole object.
+    pub const WHOLE: u16 = u16::MAX;
 }
 
 /// `x.floor() as i64`, bit for bit (NaN gives 0, out-of-range values saturate), without the
@@ -550,6 +558,7 @@ impl World {
                         t_out,
                         object,
                         material,
+                        segment: Interval::WHOLE,
                     });
                 }
             }
@@ -587,6 +596,9 @@ impl World {
                     t_out,
                     object,
                     material: obj.material,
+                    // A wall of more segments than that (beyond the point limit of scenario
+                    // files) finds its normal by the nearest face instead.
+                    segment: u16::try_from(segment).unwrap_or(Interval::WHOLE),
                 }),
                 _ => {}
             }
@@ -699,8 +711,21 @@ impl World {
                     t_out,
                     object: index,
                     material: obj.material,
+                    segment: Interval::WHOLE,
                 });
             }
+        }
+    }
+
+    /// The outward unit normal where the ray of `iv` enters it at `p`: the entered segment's
+    /// face for a wall tested segment by segment, else [`Shape::normal_at`] of the object.
+    pub fn normal_at(&self, iv: &Interval, p: DVec3) -> DVec3 {
+        let shape = &self.objects[iv.object as usize].shape;
+        match shape {
+            Shape::Wall { segments, .. } if iv.segment != Interval::WHOLE => {
+                segments[iv.segment as usize].face_at(p).1
+            }
+            _ => shape.normal_at(p),
         }
     }
 
@@ -966,6 +991,44 @@ mod tests {
                 let fast = world.ray_intervals(&ray, t_max, &mut a);
                 let slow = world.ray_intervals_exhaustive(&ray, t_max, &mut b);
                 prop_assert_eq!(fast, slow);
+            }
+        }
+
+        /// A wall solid to the radar is met segment by segment, and the normal where a ray
+        /// enters it is the entered segment's face: the point lies on that face, and wherever
+        /// one face of the whole wall is clearly the nearest, it is the nearest-face normal.
+        #[test]
+        fn wall_entry_normal_is_the_entered_segments_face(
+            walls in prop::collection::vec(arb_shape(), 1..12),
+            rays in prop::collection::vec(arb_hard_ray(), 1..30),
+        ) {
+            let walls: Vec<_> = walls
+                .into_iter()
+                .filter(|s| matches!(s, Shape::Wall { .. }))
+                .map(|s| (s, "concrete"))
+                .collect();
+            let world = strategies::world_of(&walls);
+            let mut q = RayQuery::default();
+            for ray in rays {
+                let mut source = world.ordered_intervals(&ray, 30.0, Some(Band::Radar), &mut q);
+                let Some(iv) = source.peek(f64::INFINITY).filter(|iv| iv.t_in > 0.0) else {
+                    continue;
+                };
+                let Shape::Wall { segments, .. } = &world.objects()[iv.object as usize].shape
+                else {
+                    unreachable!("only walls here")
+                };
+                prop_assert!(iv.segment != Interval::WHOLE, "{:?}", iv);
+                let p = ray.at(iv.t_in);
+                let n = world.normal_at(&iv, p);
+                let (d, face) = segments[iv.segment as usize].face_at(p);
+                prop_assert!(d.abs() < 1e-9, "{p} is {d} m off the entered face");
+                prop_assert_eq!(n, face);
+                let mut dist: Vec<f64> = segments.iter().map(|s| s.face_at(p).0.abs()).collect();
+                dist.sort_by(f64::total_cmp);
+                if dist.len() == 1 || dist[1] > 1e-6 {
+                    prop_assert_eq!(n, world.objects()[iv.object as usize].shape.normal_at(p));
+                }
             }
         }
 

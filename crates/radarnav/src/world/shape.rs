@@ -116,7 +116,7 @@ impl OrientedBox {
 
     /// How far `p` lies outside the box's surface along its nearest face's normal (negative
     /// inside), and that face's outward normal in the world frame.
-    fn face_at(&self, p: DVec3) -> (f64, DVec3) {
+    pub(crate) fn face_at(&self, p: DVec3) -> (f64, DVec3) {
         let l = self.local_vec(p - self.center);
         let excess = l.abs() - self.half;
         let (axis, dist) = if excess.x >= excess.y && excess.x >= excess.z {
