@@ -129,11 +129,15 @@ impl SensorConfig {
     ) -> Answer {
         let sig = &self.signal;
         let model = sig.echo_model();
-        // The tracer's buffers, lent for this azimuth and given back at the end.
-        let mut echoes = std::mem::take(&mut tracer.beam_echoes);
+        // The tracer's buffers: the echo walk's, and per beam ray where its echoes start in
+        // `echoes` and its first incidence cosine.
+        let Tracer {
+            echo,
+            beam_echoes: echoes,
+            beam_spans: spans,
+            ..
+        } = tracer;
         echoes.clear();
-        // Per beam ray: where its echoes start, and its first incidence cosine.
-        let mut spans = std::mem::take(&mut tracer.beam_spans);
         spans.clear();
         for (b, &el) in beam.iter().zip(el_sin_cos) {
             let ray = beam_ray(pose, az + b.d_az, el, b.lateral);
@@ -142,10 +146,9 @@ impl SensorConfig {
             let cos = match fan {
                 Some(fan) => {
                     let heading = pose.yaw + az + b.d_az;
-                    let e = &mut tracer.echo;
-                    e.echoes_in_fan(world, fan, heading, &ray, w, max, &model, &mut echoes)
+                    echo.echoes_in_fan(world, fan, heading, &ray, w, max, &model, echoes)
                 }
-                None => tracer.echo.echoes(world, &ray, w, max, &model, &mut echoes),
+                None => echo.echoes(world, &ray, w, max, &model, echoes),
             };
             // Only echoes a receiver can tell from noise count; each ray's by range.
             let mut k = start;
@@ -156,7 +159,9 @@ impl SensorConfig {
                 }
             }
             echoes.truncate(k);
-            echoes[start..].sort_by(|a, b| a.range.total_cmp(&b.range));
+            if k - start > 1 {
+                echoes[start..].sort_by(|a, b| a.range.total_cmp(&b.range));
+            }
             spans.push((start, cos));
         }
         spans.push((echoes.len(), 0.0));
@@ -222,8 +227,6 @@ impl SensorConfig {
             0
         };
         let chosen_beam = beam_of(chosen);
-        tracer.beam_echoes = echoes;
-        tracer.beam_spans = spans;
         Answer {
             range,
             kind,
