@@ -607,32 +607,6 @@ impl World {
         }
     }
 
-    /// Tests part `part` for [`World::first_solid`] (objects not solid to band bit `bit` are
-    /// skipped) and keeps in `best` whichever interval comes first in entry order.
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn keep_first_solid(
-        &self,
-        part: u32,
-        ray: &Ray,
-        t_max: f64,
-        bit: u8,
-        stamps: &mut [u32],
-        stamp: u32,
-        spans: &mut Vec<(f64, f64)>,
-        best: &mut Option<Interval>,
-    ) {
-        if self.solid[self.parts[part as usize].object as usize] & bit == 0 {
-            return;
-        }
-        let keep = |iv: Interval| {
-            if best.is_none_or(|b| entry_order(&iv, &b) == Ordering::Less) {
-                *best = Some(iv);
-            }
-        };
-        self.test_part_with(part, ray, t_max, bit, stamps, stamp, spans, keep);
-    }
-
     /// Whether every object is either solid or fully transparent to `band` (attenuation
     /// infinite or zero): then a ray without aerosol draws ends at its first solid entry, and
     /// [`World::first_solid`] finds it without the penetration walk.
@@ -657,8 +631,18 @@ impl World {
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
         let (stamps, stamp, spans) = (&mut q.stamps, q.stamp, &mut q.spans);
+        // Tests a part (objects not solid to the band are skipped) and keeps in `best`
+        // whichever interval comes first in entry order.
         let mut test = |part: u32, best: &mut Option<Interval>| {
-            self.keep_first_solid(part, ray, t_max, bit, stamps, stamp, spans, best);
+            if self.solid[self.parts[part as usize].object as usize] & bit == 0 {
+                return;
+            }
+            let keep = |iv: Interval| {
+                if best.is_none_or(|b| entry_order(&iv, &b) == Ordering::Less) {
+                    *best = Some(iv);
+                }
+            };
+            self.test_part_with(part, ray, t_max, bit, stamps, stamp, spans, keep);
         };
         match fan {
             Some((fan, heading)) => {
@@ -726,8 +710,6 @@ impl World {
             Shape::Wall { segments, .. } if iv.segment != Interval::WHOLE => {
                 segments[iv.segment as usize].face_at(p).1
             }
-            // The commonest shape of foliage, without the call (as `Shape::normal_at`).
-            Shape::Sphere { center, .. } => (p - *center).try_normalize().unwrap_or(DVec3::Z),
             _ => shape.normal_at(p),
         }
     }

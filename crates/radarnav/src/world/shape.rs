@@ -478,6 +478,7 @@ impl Shape {
     /// The outward unit normal of the surface nearest to `p`, a point on (or within rounding
     /// of) the surface: where a ray enters, for the incidence angle of its echo and the
     /// direction of a mirrored ray (DESIGN §7.2).
+    #[inline]
     pub fn normal_at(&self, p: DVec3) -> DVec3 {
         let radial = |c: DVec3| {
             let v = DVec3::new(p.x - c.x, p.y - c.y, 0.0);
