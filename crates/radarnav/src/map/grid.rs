@@ -491,7 +491,12 @@ impl Grid {
             Layers::Sensed
         };
         let (lo, hi, miss) = (self.l_min, self.l_max, self.l_miss);
-        let (mark, sensed, passable) = (&mut self.mark, &mut self.sensed, &mut self.passable);
+        // Slices, not the vectors: their lengths and pointers stay in registers.
+        let (mark, sensed, passable) = (
+            &mut self.mark[..],
+            &mut self.sensed[..],
+            &mut self.passable[..],
+        );
         for b in beams {
             let walk = CellWalk::new(b.from, b.to, self.resolution);
             let n = walk.len() - usize::from(b.hit);

@@ -14,7 +14,10 @@
 //! * **Bug2** leaves where it crosses the *m-line* (start to goal) closer to the goal than
 //!   its hit point and the way toward the goal is open. A crossing is a change of side of the
 //!   line between two calls, or a position within `mline_tolerance` of it, between start and
-//!   goal. Back at the hit point without such a crossing: `no_path`.
+//!   goal. Where the body's corridor toward the goal is blocked at the crossing itself (the
+//!   corner of a neighbouring obstacle), the leave waits for the loop tolerance along the
+//!   boundary, and a crossing inside a gap being passed counts until the robot is through.
+//!   Back at the hit point without such a crossing: `no_path`.
 //!
 //! The goal is reached within `tolerance` of it. The pose used is the odometry, or the true
 //! pose when the mission asks for it; "back at the hit point" means within
@@ -212,8 +215,10 @@ struct Boundary {
     away_from_closest: bool,
     /// Bug2: within the m-line tolerance at the last call.
     on_mline: bool,
-    /// Bug2: a closer crossing was met; leave there (once out of a gap being passed).
-    leave: bool,
+    /// Bug2: a closer crossing was met, at this distance followed; leave there (once out of
+    /// a gap being passed), or within the loop tolerance on where the way toward the goal
+    /// was blocked at the crossing itself.
+    leave: Option<f64>,
     /// The followed path: (position, heading, distance followed), every [`TRAIL_STEP`].
     trail: Vec<(DVec2, f64, f64)>,
 }
@@ -232,7 +237,7 @@ impl Boundary {
             circled: false,
             away_from_closest: false,
             on_mline: true,
-            leave: false,
+            leave: None,
             trail: Vec::new(),
         }
     }
@@ -620,16 +625,28 @@ impl BugController {
                         bd.on_mline = near;
                         // Staying on the line counts as well: a gap that lies on it is
                         // passed along the line, never entering the band from outside.
-                        if on && goal_dist < bd.hit_goal_dist - CLOSER_BY {
-                            bd.leave = true;
+                        // A crossing inside a gap being passed is left from once through:
+                        // the way out of the gap counts as the crossing.
+                        if on && goal_dist < bd.hit_goal_dist - CLOSER_BY
+                            || passing && bd.leave.is_some()
+                        {
+                            bd.leave = Some(bd.travelled);
                         }
-                        // A crossing inside a gap being passed is left from once through.
-                        if bd.leave && !passing {
-                            bd.leave = false;
+                        // Where the way toward the goal is blocked at the crossing (a corner
+                        // of the next obstacle in the body's corridor), a little farther
+                        // along the boundary it may be open: the leave waits for the loop
+                        // tolerance.
+                        if let Some(at) = bd.leave
+                            && !passing
+                        {
                             if !goal_blocked {
+                                bd.leave = None;
                                 self.report.leave_points.push(p.to_array());
                                 self.mode = Mode::ToGoal;
                                 return Decision::Drive(DriveCommand::STOP);
+                            }
+                            if bd.travelled - at > tol {
+                                bd.leave = None;
                             }
                         }
                         if looped {

@@ -22,7 +22,14 @@
 //! wall, a corridor): beyond the gap the robot drives on centred between them while they are
 //! nearer together than twice the follow radius, turns about on the spot at a dead end and
 //! comes back out the same way (which is how the boundary goes on), and hands back to the
-//! follower where the way widens.
+//! follower where the way widens. A dead end with no room to turn about is backed out of.
+//!
+//! A gap can look wider from afar than the way through it is (returns on box corners, range
+//! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
+//! again, and after three tries gives the gap up, backing out along the line
+//! through it to the approach point, where there is room to turn and follow on. Both ends
+//! leave the robot where the follower can go on, never wedged in the gap's mouth turning or
+//! shuffling until a timeout.
 //!
 //! Returns are taken in the order the sensor's rays swept (by angle about the sensor, not the
 //! robot's centre), and the gap's width is counted half a ray spacing narrower at each end:
@@ -59,6 +66,11 @@ const REFINE_COS: f64 = 0.985;
 pub const BACK_SPEED: f64 = 0.1;
 /// Returns inside the body's swept zone that block a move (one may be range noise).
 const HITS_TO_BLOCK: usize = 3;
+/// Backing out of a gap is straight back once facing through it within this, rad.
+const RETREAT_ALIGNED: f64 = 0.2;
+/// Times the way ahead may block a pass before the gap is given up: backing out and driving
+/// in again meets the same sides (a gap narrower than it looked from afar).
+const PASS_BLOCKS: u32 = 3;
 
 /// Whether a body of `length` × `width` m can turn on the spot among the robot-frame returns
 /// `points`: fewer than [`HITS_TO_BLOCK`] lie in the circle it sweeps (its half-diagonal
@@ -231,6 +243,9 @@ enum Phase {
     /// Past the narrowest pair but still between two sides nearer together than the
     /// follower's circle (the gap is the mouth of a passage: a crate's length, a corridor).
     Through,
+    /// Given up inside the gap: backing out along the line through it to the approach point,
+    /// where there is room to turn and follow on.
+    Retreat,
 }
 
 /// Driving through one gap (see the module docs).
@@ -251,6 +266,9 @@ pub struct Passage {
     /// Distance driven since the gap was passed (believed), m, and where the last step was.
     through: f64,
     last: Option<DVec2>,
+    /// Times the way ahead blocked the pass, and whether the last step backed out.
+    blocks: u32,
+    backing: bool,
 }
 
 /// What a passage step asks for.
@@ -280,6 +298,8 @@ impl Passage {
             free_to_turn: false,
             through: 0.0,
             last: None,
+            blocks: 0,
+            backing: false,
         }
     }
 
@@ -348,6 +368,17 @@ impl Passage {
             self.phase = Phase::Pass;
         }
         let (v, omega) = match self.phase {
+            Phase::Retreat if t <= -approach => return PassStep::Blocked,
+            // Facing through the gap first (undoing a dead-end turn cut short retraces what
+            // the body swept), then straight back.
+            Phase::Retreat if toward_normal.abs() > RETREAT_ALIGNED => (
+                0.0,
+                (K_HEADING * toward_normal).clamp(-PASS_TURN, PASS_TURN),
+            ),
+            Phase::Retreat => (
+                -BACK_SPEED,
+                (K_HEADING * toward_normal).clamp(-PASS_TURN, PASS_TURN),
+            ),
             Phase::Approach => {
                 let a = g.mid - g.normal * approach;
                 if (a - p).length() < AT_APPROACH {
@@ -424,13 +455,23 @@ impl Passage {
         let behind_clear =
             clear(&|q| q.x >= -half.0 - 0.1 && q.x <= half.0 + BODY_MARGIN && q.y.abs() <= half.1);
         let turn_clear = turn_clear(points, length, width);
+        if self.phase == Phase::Retreat {
+            return if v == 0.0 || behind_clear {
+                PassStep::Drive(v, omega)
+            } else {
+                PassStep::Blocked
+            };
+        }
         self.free_to_turn =
             self.phase == Phase::Through && self.through >= self.narrow && turn_clear;
         // A dead end between the sides: turn about on the spot and go back out between
         // them, which is how the boundary goes on (round the end, along the other side).
         if self.phase == Phase::Through && (self.about > 0.0 || v > 0.0 && !ahead_clear) {
+            // No room to turn about: back out the way in instead.
             if !turn_clear {
-                return PassStep::Blocked;
+                self.phase = Phase::Retreat;
+                self.about = 0.0;
+                return PassStep::Drive(0.0, 0.0);
             }
             if self.about <= 0.0 {
                 self.about = std::f64::consts::PI;
@@ -439,15 +480,27 @@ impl Passage {
             return PassStep::Drive(0.0, PASS_TURN);
         }
         if v > 0.0 && !ahead_clear || v == 0.0 && omega != 0.0 && !turn_clear {
-            // Straighten up on the spot if that is clear, else back out along the way in.
-            if v > 0.0 && turn_clear && omega != 0.0 {
+            // Straighten up on the spot if that is clear and the heading is off by more
+            // than the alignment tolerance (a turn toward an ever smaller error would never
+            // end), else back out along the way in.
+            if v > 0.0 && turn_clear && omega.abs() > K_HEADING * ALIGNED {
                 return PassStep::Drive(0.0, omega);
             }
             if self.phase == Phase::Pass && behind_clear {
+                // Back out and try again, but not for ever: driving in and backing out
+                // against the same sides is no progress.
+                if !self.backing {
+                    self.blocks += 1;
+                    if self.blocks >= PASS_BLOCKS {
+                        self.phase = Phase::Retreat;
+                    }
+                }
+                self.backing = true;
                 return PassStep::Drive(-BACK_SPEED, 0.0);
             }
             return PassStep::Blocked;
         }
+        self.backing = false;
         PassStep::Drive(v, omega)
     }
 }
@@ -602,13 +655,36 @@ mod tests {
     fn drive_through_watching(
         walls: &[(DVec2, DVec2)],
         start: Pose,
-        mut watch: impl FnMut(&Passage, &Pose),
+        watch: impl FnMut(&Passage, &Pose),
     ) -> Pose {
+        match drive(walls, start, watch) {
+            (PassStep::Done, pose, _) => pose,
+            (_, pose, _) => panic!("blocked at {pose:?}"),
+        }
+    }
+
+    /// Drives a passage as [`drive_through`] does until it is done or given up: how it
+    /// ended, where, and after how many seconds.
+    fn drive(
+        walls: &[(DVec2, DVec2)],
+        start: Pose,
+        watch: impl FnMut(&Passage, &Pose),
+    ) -> (PassStep, Pose, f64) {
+        let pts = scan(&local(walls, &start));
+        let g = find_gap(&pts, DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
+        drive_gap(walls, start, g.in_frame(&start), watch)
+    }
+
+    /// [`drive`] through the world-frame `gap`, whatever the returns show.
+    fn drive_gap(
+        walls: &[(DVec2, DVec2)],
+        start: Pose,
+        gap: Gap,
+        mut watch: impl FnMut(&Passage, &Pose),
+    ) -> (PassStep, Pose, f64) {
         let (length, width) = (0.508, 0.497);
         let mut pose = start;
-        let pts = scan(&local(walls, &pose));
-        let g = find_gap(&pts, DVec2::ZERO, -1.0, 3.0, 1.5, 0.71, 3.0).expect("gap");
-        let mut pass = Passage::new(g.in_frame(&pose), 3.0, 0.4);
+        let mut pass = Passage::new(gap, 3.0, 0.4);
         let dt = 0.05;
         let mut steps = 0;
         loop {
@@ -618,8 +694,7 @@ mod tests {
                     pose.x += v * dt * pose.yaw.cos();
                     pose.y += v * dt * pose.yaw.sin();
                 }
-                PassStep::Done => return pose,
-                PassStep::Blocked => panic!("blocked at {pose:?}"),
+                end => return (end, pose, steps as f64 * dt),
             }
             watch(&pass, &pose);
             let r = DVec2::from_angle(-pose.yaw);
@@ -701,5 +776,51 @@ mod tests {
         let pose = drive_through(&walls, Pose::default());
         assert!(pose.y > -1.0, "{pose:?}");
         assert!(wrap_angle(pose.yaw - FRAC_PI_2).abs() < 0.3, "{pose:?}");
+    }
+
+    /// Where the robot following the wall of [`doorway`] stands when it gives a gap up: back
+    /// at the approach point in front of it, facing through it.
+    fn given_up_in_front(pose: &Pose, door: f64) {
+        let approach = 0.508 / 2.0 + APPROACH_OFFSET;
+        assert!(pose.y >= -1.0 + approach - 0.05, "{pose:?}");
+        assert!((pose.x - (1.0 + door / 2.0)).abs() < 0.15, "{pose:?}");
+        assert!(wrap_angle(pose.yaw + FRAC_PI_2).abs() < 0.3, "{pose:?}");
+    }
+
+    #[test]
+    fn a_gap_whose_way_blocks_the_body_is_given_up_from_in_front_of_it() {
+        // A doorway seen as a gap (from afar, in noise) that is a niche 0.3 m deep: the way
+        // ahead blocks the body in it. The robot backs out and tries again, then gives the
+        // gap up, backing out to the approach point (rather than driving in and out, or
+        // turning toward an ever smaller heading error, until the timeout).
+        let mut walls = doorway(0.8);
+        walls.push((DVec2::new(0.0, -1.3), DVec2::new(3.0, -1.3)));
+        let gap = Gap {
+            mid: DVec2::new(1.4, -1.0),
+            normal: DVec2::new(0.0, -1.0),
+            width: 0.8,
+        };
+        let (end, pose, time) = drive_gap(&walls, Pose::default(), gap, |_, _| {});
+        assert_eq!(end, PassStep::Blocked);
+        assert!(time < 30.0, "gave up after {time} s");
+        given_up_in_front(&pose, 0.8);
+    }
+
+    #[test]
+    fn a_dead_end_too_narrow_to_turn_in_is_backed_out_of() {
+        // A way as wide as the doorway, 0.74 m (the body's turning circle is 0.75 m), closed
+        // 1.5 m in: no room to turn about at its end, so the robot backs out along it.
+        let door = 0.74;
+        let mut walls = doorway(door);
+        walls.extend([
+            (DVec2::new(1.0, -1.0), DVec2::new(1.0, -2.5)),
+            (DVec2::new(1.0, -2.5), DVec2::new(1.0 + door, -2.5)),
+            (DVec2::new(1.0 + door, -2.5), DVec2::new(1.0 + door, -1.0)),
+        ]);
+        let mut deepest = f64::INFINITY;
+        let (end, pose, _) = drive(&walls, Pose::default(), |_, p| deepest = deepest.min(p.y));
+        assert_eq!(end, PassStep::Blocked);
+        assert!(deepest < -1.8, "went {deepest} m in");
+        given_up_in_front(&pose, door);
     }
 }

@@ -52,6 +52,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/c-goal.toml"),
     ),
     (
+        "nav/clutter",
+        include_str!("../../../../scenarios/nav/clutter.toml"),
+    ),
+    (
         "nav/crate-gap",
         include_str!("../../../../scenarios/nav/crate-gap.toml"),
     ),
@@ -70,6 +74,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
     (
         "nav/hall",
         include_str!("../../../../scenarios/nav/hall.toml"),
+    ),
+    (
+        "nav/hedge-end",
+        include_str!("../../../../scenarios/nav/hedge-end.toml"),
     ),
     (
         "nav/hedge-gap",

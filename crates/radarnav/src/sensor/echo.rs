@@ -413,14 +413,15 @@ fn volume_echoes(
     let step = (t1 - t0) / pieces;
     // Two-way decay constant of the power, 1/m.
     let k = 2.0 * alpha * LN_10 / 10.0;
+    // The pieces are equally long, so each one's decay integral is the same.
+    let integral = if k > 0.0 {
+        -(-k * step).exp_m1() / k
+    } else {
+        step
+    };
     for i in 0..pieces as usize {
         let a = t0 + step * i as f64;
         let entry_loss = loss + alpha * (a - t0);
-        let integral = if k > 0.0 {
-            -(-k * step).exp_m1() / k
-        } else {
-            step
-        };
         let mid = leg.path + a + step / 2.0;
         emit(Echo {
             range: leg.path + a,
