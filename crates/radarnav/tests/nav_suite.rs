@@ -59,3 +59,27 @@ fn the_geometry_tells_reachable_from_closed_maps() {
     assert_eq!(reach("nav/smoke-cloud"), [true, true]);
     assert_eq!(reach("nav/hedge-gap"), [true, true]);
 }
+
+#[test]
+fn bug2_gets_through_a_room_of_crates() {
+    // The crates' pockets and ways narrower than the turning circle: in this run a passage
+    // turned on the spot toward an ever smaller heading error in a way that blocked the
+    // body, until the no-progress watchdog ended it `no_path`.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let map = TrialMap::new(Scenario::builtin("nav/clutter").expect("built-in")).expect("bug");
+    let trial = Trial {
+        algorithm: BugAlgorithm::Bug2,
+        sensor: SensorClass::Radar,
+        pose: PoseSource::Truth,
+        seed: 1,
+    };
+    let r = map.run(&trial).expect("the run starts");
+    assert!(
+        r.passed(),
+        "{}",
+        failures(std::slice::from_ref(&r)).join("\n")
+    );
+    assert_eq!(r.bumps, 0);
+}
