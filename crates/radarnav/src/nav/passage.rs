@@ -359,6 +359,8 @@ impl Passage {
         let e = (p - g.mid).dot(g.normal.perp());
         let heading_to = |target: DVec2| wrap_angle((target - p).to_angle() - pose.yaw);
         let toward_normal = wrap_angle(g.normal.to_angle() - pose.yaw);
+        // The turn that faces the robot through the gap.
+        let face = (K_HEADING * toward_normal).clamp(-PASS_TURN, PASS_TURN);
         let approach = length / 2.0 + APPROACH_OFFSET;
         if self.phase == Phase::Approach
             && t < -0.5 * approach
@@ -371,14 +373,8 @@ impl Passage {
             Phase::Retreat if t <= -approach => return PassStep::Blocked,
             // Facing through the gap first (undoing a dead-end turn cut short retraces what
             // the body swept), then straight back.
-            Phase::Retreat if toward_normal.abs() > RETREAT_ALIGNED => (
-                0.0,
-                (K_HEADING * toward_normal).clamp(-PASS_TURN, PASS_TURN),
-            ),
-            Phase::Retreat => (
-                -BACK_SPEED,
-                (K_HEADING * toward_normal).clamp(-PASS_TURN, PASS_TURN),
-            ),
+            Phase::Retreat if toward_normal.abs() > RETREAT_ALIGNED => (0.0, face),
+            Phase::Retreat => (-BACK_SPEED, face),
             Phase::Approach => {
                 let a = g.mid - g.normal * approach;
                 if (a - p).length() < AT_APPROACH {
@@ -399,10 +395,7 @@ impl Passage {
                     self.phase = Phase::Pass;
                     (0.0, 0.0)
                 } else {
-                    (
-                        0.0,
-                        (K_HEADING * toward_normal).clamp(-PASS_TURN, PASS_TURN),
-                    )
+                    (0.0, face)
                 }
             }
             Phase::Pass if t <= length / 2.0 + 0.3 => {
