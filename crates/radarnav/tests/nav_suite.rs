@@ -83,3 +83,36 @@ fn bug2_gets_through_a_room_of_crates() {
     );
     assert_eq!(r.bumps, 0);
 }
+
+#[test]
+fn a_laser_robot_on_odometry_turns_among_tight_crates_without_touching_them() {
+    // Here the follower wanted to turn on the spot with a crate's corner beside the body,
+    // inside the circle it sweeps. Backing off first (the old rule) went blind into the
+    // crate behind (the laser sees nothing behind), and turning where backing had left it
+    // swept into the corner: two bumps. Driving on to where the sensor sees room to turn
+    // does not.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let map = TrialMap::new(Scenario::builtin("nav/crates-tight").expect("built-in")).expect("bug");
+    for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
+        let trial = Trial {
+            algorithm,
+            sensor: SensorClass::Laser,
+            pose: PoseSource::Odometry,
+            seed: 1,
+        };
+        let r = map.run(&trial).expect("the run starts");
+        assert_eq!(
+            r.bumps,
+            0,
+            "{}",
+            failures(std::slice::from_ref(&r)).join("\n")
+        );
+        assert!(
+            r.passed(),
+            "{}",
+            failures(std::slice::from_ref(&r)).join("\n")
+        );
+    }
+}

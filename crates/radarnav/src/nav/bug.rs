@@ -40,8 +40,11 @@
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
 //!   a corner) has met a `no_path` condition too, and retries with a smaller standoff;
 //! * coming back past the hit point the other way (out of a dead end) closes no loop;
-//! * a turn on the spot with a return inside the body's circumscribed circle, or one that
-//!   bumped, backs off 0.15 m first where the way behind the body is free;
+//! * a turn on the spot with a return inside the body's circumscribed circle first drives
+//!   on to where the turn is clear, if the sensor sees that within 0.5 m (a corner beside
+//!   the body; a 270° laser is blind behind), else backs to where it is clear within 0.3 m,
+//!   else backs off a little where the way behind is seen free and backing takes the body
+//!   away from what it would sweep; a turn that bumped backs off 0.15 m;
 //! * turning about or leaving waits while the follower is committed to a gap
 //!   ([`super::passage::Passage::committed`]).
 
@@ -49,7 +52,7 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
-use super::passage::{BACK_SPEED, turn_clear};
+use super::passage::{BACK_SPEED, backing_eases_turn, room_to_turn, turn_clear};
 use super::wall_follow::{Side, WallFollower};
 use super::{Behaviour, nav_pose};
 use crate::map::PoseSource;
@@ -81,6 +84,10 @@ const SAME_WAY: f64 = 1.05;
 /// backs the robot off this far first, m (a box-shaped body turning near a corner sweeps
 /// past its sides); twice this at most before turning anyway.
 const BACK_OFF: f64 = 0.15;
+/// A turn on the spot with a return inside the circle the body sweeps drives on first to
+/// where it is clear, if that is seen free within this distance, m (half a body length
+/// past a corner beside it).
+const SHIFT_MAX: f64 = 0.5;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
 /// A robot that stays within this distance of one place ...
@@ -300,8 +307,8 @@ pub struct BugController {
     turned: bool,
     /// Distance still to back off after a turn on the spot bumped, m.
     backing: f64,
-    /// Distance backed off before the turn now wanted (believed), m, and where from.
-    backed: (f64, Option<DVec2>),
+    /// Distance moved (on or back) before the turn now wanted (believed), m, and where from.
+    shifted: (f64, Option<DVec2>),
     report: BugReport,
 }
 
@@ -315,7 +322,7 @@ impl BugController {
             ..Default::default()
         };
         Self {
-            bumpers: BumperSensor::new(mission.bumpers.clone()),
+            bumpers: BumperSensor::new(mission.bumpers.clone()).believing(mission.pose),
             follower: WallFollower::new(mission.follow, mission.speed, TURN_RATE),
             mission,
             rate_hz,
@@ -326,7 +333,7 @@ impl BugController {
             still: None,
             turned: false,
             backing: 0.0,
-            backed: (0.0, None),
+            shifted: (0.0, None),
             report,
         }
     }
@@ -359,7 +366,8 @@ impl BugController {
         self.bumpers = BumperSensor::new(BumperConfig {
             safety: Some(next),
             ..self.bumpers.config().clone()
-        });
+        })
+        .believing(self.mission.pose);
         self.mode = Mode::ToGoal;
         self.start = Some(p);
         self.last_leave = None;
@@ -396,23 +404,36 @@ impl Behaviour for BugController {
         self.turned = matches!(d, Decision::Drive(c) if c.is_turn_on_the_spot());
         let p = nav_pose(self.mission.pose, input).xy();
         if !self.turned {
-            self.backed = (0.0, None);
+            self.shifted = (0.0, None);
         }
         // A turn on the spot sweeps the body's circumscribed circle: with a corner inside it,
-        // back off first (a little, where the way behind is free), then turn.
+        // move to where it is clear first, then turn: ahead, where the sensor sees, or else
+        // back a little.
         if self.turned
             && let Some(b) = self.bumpers.update(input)
         {
             let v = input.vehicle;
-            let (backed, from) = &mut self.backed;
-            *backed += from.map_or(0.0, |f| (p - f).length());
+            let (moved, from) = &mut self.shifted;
+            *moved += from.map_or(0.0, |f| (p - f).length());
             *from = Some(p);
-            if !turn_clear(b.points(), v.length, v.width)
-                && *backed < 2.0 * BACK_OFF
-                && behind_free(b, v, BACK_OFF)
-            {
-                d = Decision::Drive(DriveCommand::twist(-BACK_SPEED, 0.0));
-                self.turned = false;
+            if !turn_clear(b.clearance(), v.length, v.width) {
+                let room = |max: f64, sign: f64| {
+                    room_to_turn(b.clearance(), v.length, v.width, max - *moved, sign)
+                        .map(|_| sign * BACK_SPEED)
+                };
+                // No short move clears the turn: back off a little all the same where the way
+                // behind is seen free and backing takes the body away from what it would
+                // sweep, then turn.
+                let back_off = *moved < 2.0 * BACK_OFF
+                    && behind_free(b, v, BACK_OFF)
+                    && backing_eases_turn(b.clearance(), v.length, v.width);
+                let speed = room(SHIFT_MAX, 1.0)
+                    .or_else(|| room(2.0 * BACK_OFF, -1.0))
+                    .or(back_off.then_some(-BACK_SPEED));
+                if let Some(speed) = speed {
+                    d = Decision::Drive(DriveCommand::twist(speed, 0.0));
+                    self.turned = false;
+                }
             }
         }
         d

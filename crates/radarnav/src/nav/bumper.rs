@@ -21,11 +21,14 @@
 //! reason for 2–3 lengths. Take `safety ≥ length/2 + budget/attenuation + margin` for
 //! denser budgets, and note that foliage the radar crosses whole is invisible to it.
 
+use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 use std::fmt;
 
 use glam::DVec2;
 
+use super::nav_pose;
+use crate::map::PoseSource;
 use crate::pose::{Pose, wrap_angle};
 use crate::sensor::{ReturnMode, Scan, SensorConfig, SensorKind};
 use crate::sim::ControlInput;
@@ -184,6 +187,9 @@ pub struct Bumpers {
     /// Every return in the robot frame (below-minimum ranges at the centre), for the
     /// corridor checks.
     points: Vec<DVec2>,
+    /// `points` followed by returns remembered from earlier scans where the sensor is blind
+    /// now ([`BumperSensor`]): what the body's clearance is checked against.
+    clearance: Vec<DVec2>,
     /// The sensor's position in the robot frame, m.
     origin: DVec2,
 }
@@ -244,6 +250,7 @@ impl Bumpers {
             stamp: scan.stamp,
             states,
             nearest,
+            clearance: points.clone(),
             points,
             origin: DVec2::new(mount.x, mount.y),
         }
@@ -259,7 +266,7 @@ impl Bumpers {
     /// [`Bumpers::corridor_free`] for the part of the corridor from `start` metres on.
     pub fn corridor_free_from(&self, angle: f64, start: f64, length: f64, half_width: f64) -> bool {
         let u = DVec2::from_angle(angle);
-        !self.points.iter().any(|p| {
+        !self.clearance.iter().any(|p| {
             let along = p.dot(u);
             (start..=length).contains(&along) && u.perp_dot(*p).abs() <= half_width
         })
@@ -268,6 +275,12 @@ impl Bumpers {
     /// Every return in the robot frame, in scan order.
     pub fn points(&self) -> &[DVec2] {
         &self.points
+    }
+
+    /// The returns the body's clearance is checked against, robot frame: [`Bumpers::points`]
+    /// and, where the sensor is blind now, returns remembered from earlier scans.
+    pub fn clearance(&self) -> &[DVec2] {
+        &self.clearance
     }
 
     /// Where the rays start in the robot frame (the sensor's mount), m.
@@ -313,12 +326,29 @@ impl Bumpers {
     }
 }
 
+/// Returns within this distance of the robot's centre are remembered, m: as far as a body
+/// backing off or turning on the spot can reach before the sensor sees there again.
+const MEMORY_RADIUS: f64 = 1.5;
+/// Remembered returns are forgotten after this long, s (odometry drifts).
+const MEMORY_TIME: f64 = 30.0;
+/// Remembered returns are kept one per cell of this size, m.
+const MEMORY_CELL: f64 = 0.05;
+
 /// Bumpers kept up to date from a robot's scans: recomputed when its sensor has a new scan.
+///
+/// A sensor that does not see all round (a 270° laser) is blind behind: a robot backing off
+/// or turning on the spot would sweep into a corner it passed a moment ago. So the returns
+/// near the robot are remembered in the believed frame ([`BumperSensor::believing`]), and
+/// those now in the sensor's blind sector are added to the [`Bumpers::clearance`] checks;
+/// where it sees, the new scan replaces them.
 #[derive(Clone, Debug)]
 pub struct BumperSensor {
     config: BumperConfig,
     stamp: f64,
     bumpers: Option<Bumpers>,
+    pose: PoseSource,
+    /// Remembered returns, believed frame, one per [`MEMORY_CELL`] cell: (point, time seen).
+    memory: BTreeMap<(i64, i64), (DVec2, f64)>,
 }
 
 impl BumperSensor {
@@ -328,7 +358,16 @@ impl BumperSensor {
             config,
             stamp: f64::NEG_INFINITY,
             bumpers: None,
+            pose: PoseSource::Odometry,
+            memory: BTreeMap::new(),
         }
+    }
+
+    /// Remembers returns in the frame of this pose source (default: odometry, as a robot
+    /// without ground truth would).
+    pub fn believing(mut self, pose: PoseSource) -> Self {
+        self.pose = pose;
+        self
     }
 
     /// The configuration.
@@ -356,16 +395,56 @@ impl BumperSensor {
         if scan.stamp != self.stamp || self.bumpers.is_none() {
             self.stamp = scan.stamp;
             let c = &self.config;
-            self.bumpers = Some(Bumpers::sense(
+            let mount = &input.sensors[i].mount;
+            let mut b = Bumpers::sense(
                 scan,
-                &input.sensors[i].mount,
+                mount,
                 c.sectors,
                 c.safety_for(input.vehicle),
                 c.band,
                 c.rule,
-            ));
+            );
+            let pose = nav_pose(self.pose, input);
+            self.remember(&mut b, scan, mount, &pose, input.time);
+            self.bumpers = Some(b);
         }
         self.bumpers.as_ref()
+    }
+
+    /// Adds the remembered returns the sensor is blind to now to `b`'s clearance, then
+    /// remembers `b`'s own near returns in their place.
+    fn remember(&mut self, b: &mut Bumpers, scan: &Scan, mount: &Pose, pose: &Pose, now: f64) {
+        let span = scan.angle_increment * scan.azimuths as f64;
+        if span >= TAU - 1e-9 {
+            // Seeing all round: nothing is hidden from the sensor for long.
+            return;
+        }
+        let centre = mount.yaw + scan.angle_min + 0.5 * (span - scan.angle_increment);
+        let blind = |q: DVec2| {
+            let d = q - b.origin;
+            wrap_angle(d.y.atan2(d.x) - centre).abs() > 0.5 * span + scan.angle_increment
+        };
+        let to_robot = DVec2::from_angle(-pose.yaw);
+        let to_world = DVec2::from_angle(pose.yaw);
+        let at = pose.xy();
+        self.memory.retain(|_, (w, seen)| {
+            let q = to_robot.rotate(*w - at);
+            let keep = now - *seen <= MEMORY_TIME && q.length() <= MEMORY_RADIUS && blind(q);
+            if keep {
+                b.clearance.push(q);
+            }
+            keep
+        });
+        for &q in &b.points {
+            if q.length() <= MEMORY_RADIUS {
+                let w = at + to_world.rotate(q);
+                let cell = (
+                    (w.x / MEMORY_CELL).floor() as i64,
+                    (w.y / MEMORY_CELL).floor() as i64,
+                );
+                self.memory.insert(cell, (w, now));
+            }
+        }
     }
 }
 
@@ -413,6 +492,72 @@ pub(crate) mod tests {
                 f32::INFINITY
             }
         }
+    }
+
+    /// A 270° scan (the back quarter blind) of `n` rays whose range is `f(azimuth)`.
+    fn laser_scan(n: usize, f: impl Fn(f64) -> f32) -> Scan {
+        let span = 1.5 * std::f64::consts::PI;
+        let inc = span / n as f64;
+        let mut s = ring_scan(n, |_| f32::INFINITY);
+        s.angle_min = -0.5 * span;
+        s.angle_increment = inc;
+        s.ranges = (0..n).map(|i| f(-0.5 * span + i as f64 * inc)).collect();
+        s
+    }
+
+    #[test]
+    fn returns_behind_a_laser_are_remembered_until_it_sees_there_again() {
+        use std::f64::consts::PI;
+        let mount = Pose::default();
+        let sense = |scan: &Scan| Bumpers::sense(scan, &mount, 8, 1.27, 0.5, BumperRule::All);
+        let wall_ahead = |a: f64| {
+            if a.cos() > 0.2 {
+                (1.0 / a.cos()) as f32
+            } else {
+                f32::INFINITY
+            }
+        };
+        let mut sensor = BumperSensor::new(BumperConfig::default());
+        let mut remember = |scan: &Scan, pose: Pose, now: f64| {
+            let mut b = sense(scan);
+            sensor.remember(&mut b, scan, &mount, &pose, now);
+            b
+        };
+        // A wall 1 m ahead, then turned about on the spot: the wall is behind, blind.
+        let seen = laser_scan(1080, wall_ahead);
+        let b = remember(&seen, Pose::default(), 0.0);
+        assert_eq!(b.clearance().len(), b.points().len());
+        let empty = laser_scan(1080, |_| f32::INFINITY);
+        let b = remember(&empty, Pose::new(0.0, 0.0, 0.0, PI), 1.0);
+        assert!(b.points().is_empty());
+        assert!(!b.clearance().is_empty());
+        // In the robot frame it lies 1 m behind: backing off is blocked, ahead is free.
+        assert!(!b.corridor_free(PI, 1.2, 0.3));
+        assert!(b.corridor_free(0.0, 1.2, 0.3));
+        assert!(b.clearance().iter().all(|q| (q.x + 1.0).abs() < 1e-6));
+        // Turned back to face where it was: the new scan (nothing there now) replaces it.
+        let b = remember(&empty, Pose::default(), 2.0);
+        assert!(b.clearance().is_empty());
+        let b = remember(&empty, Pose::new(0.0, 0.0, 0.0, PI), 3.0);
+        assert!(b.clearance().is_empty());
+        // Forgotten after a while, or once farther than the memory's radius.
+        remember(&seen, Pose::default(), 10.0);
+        let later = remember(
+            &empty,
+            Pose::new(0.0, 0.0, 0.0, PI),
+            10.0 + MEMORY_TIME + 1.0,
+        );
+        assert!(later.clearance().is_empty());
+        remember(&seen, Pose::default(), 50.0);
+        // 1.6 m behind it: farther than the memory reaches.
+        let far = remember(&empty, Pose::new(2.6, 0.0, 0.0, 0.0), 51.0);
+        assert!(far.clearance().is_empty());
+        // A sensor that sees all round remembers nothing.
+        let mut all_round = BumperSensor::new(BumperConfig::default());
+        let ring = ring_scan(360, wall_ahead);
+        let mut b = sense(&ring);
+        all_round.remember(&mut b, &ring, &mount, &Pose::default(), 0.0);
+        assert!(all_round.memory.is_empty());
     }
 
     #[test]

@@ -181,7 +181,7 @@ impl ExploreController {
             Strategy::Frontier => Phase::Path,
         };
         Self {
-            bumpers: BumperSensor::new(mission.bumpers.clone()),
+            bumpers: BumperSensor::new(mission.bumpers.clone()).believing(mission.pose),
             follower: WallFollower::new(mission.follow, mission.speed, TURN_RATE),
             rng: ChaCha8Rng::seed_from_u64(seed),
             phase,

@@ -44,8 +44,10 @@ pub trait Behaviour {
 
 /// A behaviour with the reflex of a real bumper: after a refused move, back away from what
 /// was hit for a moment (forward if the robot hit something while reversing, turning back
-/// if it hit something turning on the spot) before the behaviour resumes, told that it bumped: the sensor missed something (foliage the radar
-/// crosses whole), so the way it was going is blocked.
+/// if it hit something turning on the spot) before the behaviour resumes, told that it
+/// bumped: the sensor missed something (foliage the radar crosses whole), so the way it was
+/// going is blocked. A recoil that is refused too (the body wedged between two obstacles)
+/// is cut short and the behaviour decides at once.
 #[derive(Clone, Debug)]
 pub struct WithRecoil<B> {
     behaviour: B,
@@ -53,6 +55,8 @@ pub struct WithRecoil<B> {
     recoil: (f64, f64),
     last: (f64, f64),
     recoiled: bool,
+    /// Whether the last command was a recoil.
+    recoiling: bool,
 }
 
 /// How long a recoil lasts, s, its speed, m/s, and its turn rate after a turn, rad/s.
@@ -67,6 +71,7 @@ impl<B> WithRecoil<B> {
             recoil: (0.0, 0.0),
             last: (0.0, 0.0),
             recoiled: false,
+            recoiling: false,
         }
     }
 
@@ -82,7 +87,12 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
     }
 
     fn update(&mut self, input: &ControlInput<'_>) -> Decision {
-        if input.bumped && self.remaining == 0 {
+        if input.bumped && self.recoiling {
+            // The recoil itself was refused (wedged between two obstacles): repeating it
+            // would push for ever. The behaviour decides, told that it bumped.
+            self.remaining = 0;
+            self.recoiled = true;
+        } else if input.bumped && self.remaining == 0 {
             self.remaining = (RECOIL.0 * self.behaviour.rate_hz()).ceil() as u32;
             let (v, omega) = self.last;
             // A turn on the spot that hit something is undone by turning back; a move by
@@ -96,7 +106,8 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
             };
             self.recoiled = true;
         }
-        if self.remaining > 0 {
+        self.recoiling = self.remaining > 0;
+        if self.recoiling {
             self.remaining -= 1;
             return Decision::Drive(DriveCommand::twist(self.recoil.0, self.recoil.1));
         }
@@ -128,5 +139,61 @@ impl Controller for Idle {
 
     fn update(&mut self, _: &ControlInput<'_>) -> Decision {
         Decision::Drive(DriveCommand::STOP)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vehicle::Twist;
+
+    /// Drives straight on, counting the calls that were told of a bump.
+    struct Ahead {
+        told: usize,
+    }
+
+    impl Behaviour for Ahead {
+        fn rate_hz(&self) -> f64 {
+            10.0
+        }
+
+        fn decide(&mut self, _: &ControlInput<'_>, bumped: bool) -> Decision {
+            self.told += usize::from(bumped);
+            Decision::Drive(DriveCommand::twist(0.4, 0.0))
+        }
+    }
+
+    fn twist(d: Decision) -> Twist {
+        match d {
+            Decision::Drive(DriveCommand::Twist(t)) => t,
+            other => panic!("a twist expected, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_recoil_that_is_refused_too_hands_back_to_the_behaviour() {
+        let pose = Pose::default();
+        let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
+        let input = |bumped| ControlInput {
+            time: 0.0,
+            odometry: &pose,
+            truth: &pose,
+            bumped,
+            scans: &[],
+            scan_odometry: &[],
+            sensors: &[],
+            vehicle,
+        };
+        let mut c = WithRecoil::new(Ahead { told: 0 });
+        assert_eq!(twist(c.update(&input(false))).v, 0.4);
+        // Driving on bumped: back away for RECOIL.0 s.
+        assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
+        assert_eq!(twist(c.update(&input(false))).v, -RECOIL.1);
+        // Backing away bumped as well (wedged): the behaviour decides, told of the bump,
+        // instead of backing into the same obstacle for ever.
+        assert_eq!(twist(c.update(&input(true))).v, 0.4);
+        assert_eq!(c.behaviour().told, 1);
+        // Its move bumping again starts a new recoil.
+        assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
     }
 }

@@ -76,8 +76,58 @@ const PASS_BLOCKS: u32 = 3;
 /// `points`: fewer than [`HITS_TO_BLOCK`] lie in the circle it sweeps (its half-diagonal
 /// plus [`BODY_MARGIN`]).
 pub fn turn_clear(points: &[DVec2], length: f64, width: f64) -> bool {
+    turn_clear_at(points, 0.0, length, width)
+}
+
+/// [`turn_clear`] for the body moved `shift` metres along its axis (forward when > 0).
+fn turn_clear_at(points: &[DVec2], shift: f64, length: f64, width: f64) -> bool {
     let radius = 0.5 * length.hypot(width) + BODY_MARGIN;
-    points.iter().filter(|q| q.length() <= radius).count() < HITS_TO_BLOCK
+    let centre = DVec2::new(shift, 0.0);
+    points
+        .iter()
+        .filter(|q| q.distance(centre) <= radius)
+        .count()
+        < HITS_TO_BLOCK
+}
+
+/// Whether a step back takes the body away from the returns inside the circle it sweeps
+/// turning on the spot (the nearest of them is no nearer after it): backing off beside a
+/// corner that lies behind the body's middle only brings the corner in.
+pub fn backing_eases_turn(points: &[DVec2], length: f64, width: f64) -> bool {
+    let radius = 0.5 * length.hypot(width) + BODY_MARGIN;
+    let back = DVec2::new(-SHIFT_STEP, 0.0);
+    let (now, then) = points
+        .iter()
+        .filter(|q| q.length() <= radius)
+        .fold((f64::INFINITY, f64::INFINITY), |(n, t), q| {
+            (n.min(q.length()), t.min(q.distance(back)))
+        });
+    then >= now
+}
+
+/// Steps in which [`room_to_turn`] tries moves, m.
+const SHIFT_STEP: f64 = 0.05;
+
+/// The shortest straight move, forward when `sign` > 0 and back when < 0, of at most `max`
+/// metres after which a body of `length` × `width` m can turn on the spot among the
+/// robot-frame returns `points`, with the strip it drives through (and 0.15 m on) free of
+/// them. `None` when there is none.
+///
+/// A corner beside the body, inside its turning circle, is left behind by a move either
+/// way; a move that brings the body nearer to it (or to a wall behind) is no help. A move
+/// back is only as safe as the sensor sees behind: a 270° laser sees nothing there.
+pub fn room_to_turn(points: &[DVec2], length: f64, width: f64, max: f64, sign: f64) -> Option<f64> {
+    let half_width = width / 2.0 + BODY_MARGIN;
+    let steps = (max / SHIFT_STEP + 1e-9).floor() as usize;
+    (1..=steps).map(|k| k as f64 * SHIFT_STEP).find(|&s| {
+        let way = (length / 2.0)..=(length / 2.0 + s + 0.15);
+        let way_clear = points
+            .iter()
+            .filter(|q| way.contains(&(sign * q.x)) && q.y.abs() <= half_width)
+            .count()
+            < HITS_TO_BLOCK;
+        way_clear && turn_clear_at(points, sign.signum() * s, length, width)
+    })
 }
 
 /// Points across a gap checked for being seen open (the pair's ends excluded).
@@ -815,5 +865,55 @@ mod tests {
         assert_eq!(end, PassStep::Blocked);
         assert!(deepest < -1.8, "went {deepest} m in");
         given_up_in_front(&pose, door);
+    }
+
+    #[test]
+    fn room_to_turn_is_found_ahead_past_a_corner_beside_the_body_and_not_toward_it() {
+        let (length, width) = (0.508, 0.497);
+        // A crate's side 0.27 m right of the centre (2 cm from the body), along the back half
+        // of the body and a metre on behind it; a wall across the way `ahead` m on.
+        let room = |ahead: f64, behind: f64| {
+            let mut walls = rect(DVec2::new(-behind, -1.5), DVec2::new(0.0, -0.27)).to_vec();
+            walls.push((DVec2::new(ahead, -3.0), DVec2::new(ahead, 3.0)));
+            let pts = scan_from(&walls, DVec2::ZERO, 0.5);
+            assert!(!turn_clear(&pts, length, width));
+            (
+                room_to_turn(&pts, length, width, 0.5, 1.0),
+                room_to_turn(&pts, length, width, 0.5, -1.0),
+            )
+        };
+        // On past the corner: hypot(s, 0.27) > 0.355 + 0.02 from s = 0.26 m on.
+        let (on, back) = room(1.2, 1.3);
+        assert!(on.is_some_and(|s| (0.26..0.31).contains(&s)), "{on:?}");
+        // Back along the crate's side it never clears within half a metre.
+        assert_eq!(back, None);
+        // A short crate is left behind backing off as well, past its far end.
+        let (_, back) = room(1.2, 0.1);
+        assert!(back.is_some_and(|s| (0.36..0.41).contains(&s)), "{back:?}");
+        // A wall 0.6 m on leaves no room to pass the corner before it.
+        assert_eq!(room(0.6, 1.3).0, None);
+        // A wall just ahead of the body: a step back is enough.
+        let pts = scan_from(
+            &[(DVec2::new(0.35, -3.0), DVec2::new(0.35, 3.0))],
+            DVec2::ZERO,
+            0.5,
+        );
+        assert!(!turn_clear(&pts, length, width));
+        assert_eq!(room_to_turn(&pts, length, width, 0.5, 1.0), None);
+        let back = room_to_turn(&pts, length, width, 0.3, -1.0);
+        assert!(back.is_some_and(|s| (0.02..0.06).contains(&s)), "{back:?}");
+        // A crate beside the body whose corner lies behind its middle (the crate further
+        // back): backing brings the corner in. One whose corner lies ahead of the middle
+        // (the crate further on): backing takes the body away from it.
+        let crate_from = |a: f64, b: f64| {
+            scan_from(
+                &rect(DVec2::new(a, -1.3), DVec2::new(b, -0.3)),
+                DVec2::ZERO,
+                0.5,
+            )
+        };
+        assert!(!backing_eases_turn(&crate_from(-1.2, -0.2), length, width));
+        assert!(backing_eases_turn(&crate_from(0.2, 1.2), length, width));
+        assert!(backing_eases_turn(&[], length, width));
     }
 }

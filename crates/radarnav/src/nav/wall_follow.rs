@@ -216,7 +216,7 @@ impl WallFollower {
             }
         }
         let passage = g.passage.as_mut()?;
-        match passage.step(pose, b.points(), g.length, g.width, dt) {
+        match passage.step(pose, b.clearance(), g.length, g.width, dt) {
             PassStep::Drive(v, omega) => Some(DriveCommand::twist(v, omega)),
             PassStep::Done | PassStep::Blocked => {
                 g.done = Some((passage.gap().mid, g.travelled));

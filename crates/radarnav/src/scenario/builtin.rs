@@ -60,6 +60,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/crate-gap.toml"),
     ),
     (
+        "nav/crates-tight",
+        include_str!("../../../../scenarios/nav/crates-tight.toml"),
+    ),
+    (
         "nav/diag-door",
         include_str!("../../../../scenarios/nav/diag-door.toml"),
     ),
