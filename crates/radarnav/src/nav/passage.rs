@@ -79,9 +79,15 @@ pub fn turn_clear(points: &[DVec2], length: f64, width: f64) -> bool {
     turn_clear_at(points, 0.0, length, width)
 }
 
+/// Radius of the circle a body of `length` × `width` m sweeps turning on the spot, with
+/// [`BODY_MARGIN`], m.
+fn turn_radius(length: f64, width: f64) -> f64 {
+    0.5 * length.hypot(width) + BODY_MARGIN
+}
+
 /// [`turn_clear`] for the body moved `shift` metres along its axis (forward when > 0).
 fn turn_clear_at(points: &[DVec2], shift: f64, length: f64, width: f64) -> bool {
-    let radius = 0.5 * length.hypot(width) + BODY_MARGIN;
+    let radius = turn_radius(length, width);
     let centre = DVec2::new(shift, 0.0);
     points
         .iter()
@@ -94,7 +100,7 @@ fn turn_clear_at(points: &[DVec2], shift: f64, length: f64, width: f64) -> bool 
 /// turning on the spot (the nearest of them is no nearer after it): backing off beside a
 /// corner that lies behind the body's middle only brings the corner in.
 pub fn backing_eases_turn(points: &[DVec2], length: f64, width: f64) -> bool {
-    let radius = 0.5 * length.hypot(width) + BODY_MARGIN;
+    let radius = turn_radius(length, width);
     let back = DVec2::new(-SHIFT_STEP, 0.0);
     let (now, then) = points
         .iter()
