@@ -116,3 +116,29 @@ fn a_laser_robot_on_odometry_turns_among_tight_crates_without_touching_them() {
         );
     }
 }
+
+#[test]
+fn bug1_in_a_dense_crate_room_leaves_for_the_neighbour_in_its_way_without_touching_it() {
+    // The follower went round three crates as one boundary; from its closest point the way
+    // toward the goal met a fourth crate at once, which the Bug took for the same obstacle:
+    // `no_path` (on either pose). The loop leaves the goal outside, so it is a neighbour,
+    // now taken up in turn. Taking it up on odometry, the robot turned on the move with a
+    // crate's corner beside its rear and swung into it (6 bumps) until the guard drove it
+    // straight on instead.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let map = TrialMap::new(Scenario::builtin("nav/crates-dense").expect("built-in")).expect("bug");
+    for (pose, seed) in [(PoseSource::Truth, 2), (PoseSource::Odometry, 2)] {
+        let trial = Trial {
+            algorithm: BugAlgorithm::Bug1,
+            sensor: SensorClass::Laser,
+            pose,
+            seed,
+        };
+        let r = map.run(&trial).expect("the run starts");
+        let why = failures(std::slice::from_ref(&r)).join("\n");
+        assert_eq!(r.bumps, 0, "{why}");
+        assert!(r.passed(), "{why}");
+    }
+}

@@ -7,10 +7,17 @@
 //!   point the shorter way round (turning about and following with the obstacle on the other
 //!   side when going back is shorter, so it covers at most 1.5 perimeters) and leaves there
 //!   (or wherever it is within half the loop tolerance as close to the goal, or once it has
-//!   followed the boundary as far as that point lay). If the way
-//!   toward the goal is blocked at that leave point, or the robot hits the obstacle again
-//!   within the loop tolerance of it, the line from the leave point re-enters the same
-//!   obstacle: `no_path`.
+//!   followed the boundary as far as that point lay, within twice the loop tolerance of it).
+//!   If the way toward the goal is blocked all along the loop tolerance round that point,
+//!   or the robot hits an obstacle again before getting a follow radius nearer the goal, the
+//!   line from the leave point re-enters the same obstacle (`no_path`) when the goal lies
+//!   *beyond the loop's boundary*: inside the loop when it went round an obstacle, outside it
+//!   when it went round the inside of a room (told by the loop's turning sense and the side
+//!   the boundary was kept on). Otherwise what is in the way is a neighbour the follower
+//!   left out of the loop (a cluster's gaps narrower than twice the standoff): the robot
+//!   leaves and takes it up, and that loop must come nearer the goal than the leave point.
+//!   Half a loop past the point without meeting it, the boundary followed has changed:
+//!   `no_path`, and a standoff retry.
 //! * **Bug2** leaves where it crosses the *m-line* (start to goal) closer to the goal than
 //!   its hit point and the way toward the goal is open. A crossing is a change of side of the
 //!   line between two calls, or a position within `mline_tolerance` of it, between start and
@@ -46,7 +53,9 @@
 //!   else backs off a little where the way behind is seen free and backing takes the body
 //!   away from what it would sweep; a turn that bumped backs off 0.15 m;
 //! * turning about or leaving waits while the follower is committed to a gap
-//!   ([`super::passage::Passage::committed`]).
+//!   ([`super::passage::Passage::committed`]);
+//! * every command then passes the [`super::guard`]: swept along its arc, it must not bring
+//!   the body to touch a return.
 
 use glam::DVec2;
 use serde::Serialize;
@@ -220,6 +229,16 @@ struct Boundary {
     circled: bool,
     /// Bug1: been away from `closest` since circling (it may be the hit point itself).
     away_from_closest: bool,
+    /// Bug1: been within the loop tolerance of `closest` since circling.
+    near_closest: bool,
+    /// Bug1: length of the closed loop, m.
+    loop_len: f64,
+    /// Bug1: the goal lies beyond the closed loop's boundary (inside the obstacle it went
+    /// round, or outside the room it went round the inside of).
+    goal_beyond: bool,
+    /// Bug1: this boundary was taken up where the way from the last leave point (this far
+    /// from the goal) met another obstacle at once; its closest point must be nearer.
+    nearer_than: Option<f64>,
     /// Bug2: within the m-line tolerance at the last call.
     on_mline: bool,
     /// Bug2: a closer crossing was met, at this distance followed; leave there (once out of
@@ -243,6 +262,10 @@ impl Boundary {
             leave_at: f64::INFINITY,
             circled: false,
             away_from_closest: false,
+            near_closest: false,
+            loop_len: 0.0,
+            goal_beyond: false,
+            nearer_than: None,
             on_mline: true,
             leave: None,
             trail: Vec::new(),
@@ -299,8 +322,9 @@ pub struct BugController {
     mode: Mode,
     start: Option<DVec2>,
     last: Option<DVec2>,
-    /// Bug1: the last leave point and its distance to the goal.
-    last_leave: Option<(DVec2, f64)>,
+    /// Bug1: the last leave point, its distance to the goal, and whether the loop it was
+    /// left from went round the goal.
+    last_leave: Option<(DVec2, f64, bool)>,
     /// Where the robot last stood still and since when (s): the no-progress watchdog.
     still: Option<(DVec2, f64)>,
     /// Whether the last command turned on the spot.
@@ -399,6 +423,10 @@ impl Behaviour for BugController {
         serde_json::to_value(&self.report).ok()
     }
 
+    fn bumpers(&self) -> Option<&super::Bumpers> {
+        self.bumpers.latest()
+    }
+
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let mut d = self.next_decision(input, bumped);
         self.turned = matches!(d, Decision::Drive(c) if c.is_turn_on_the_spot());
@@ -438,6 +466,36 @@ impl Behaviour for BugController {
         }
         d
     }
+}
+
+/// The winding number of the closed path through `ring` (its last point joined to its
+/// first) round `q`: +1 once round anticlockwise, 0 when `q` lies outside.
+fn winding(ring: &[DVec2], q: DVec2) -> i32 {
+    let d: Vec<DVec2> = ring
+        .iter()
+        .map(|&p| p - q)
+        .filter(|d| d.length() > 1e-9)
+        .collect();
+    let turned: f64 = d
+        .iter()
+        .zip(d.iter().cycle().skip(1))
+        .map(|(a, b)| a.angle_to(*b))
+        .sum();
+    (turned / std::f64::consts::TAU).round() as i32
+}
+
+/// Whether a followed loop `ring` leaves `q` on the side of the boundary it kept on its
+/// `side`: inside the obstacle it went round, or, round the inside of a room (a loop the
+/// other way about), outside the room. Bug1's leave point then faces the same obstacle.
+fn beyond_boundary(ring: &[DVec2], q: DVec2, side: Side) -> bool {
+    // Twice the signed area: positive anticlockwise, the inside on the left.
+    let area: f64 = ring
+        .iter()
+        .zip(ring.iter().cycle().skip(1))
+        .map(|(a, b)| a.perp_dot(*b))
+        .sum();
+    let inside_is_obstacle = (area > 0.0) == (side == Side::Left);
+    (winding(ring, q) != 0) == inside_is_obstacle
 }
 
 /// Whether the strip `distance` metres long behind the body's rear face, as wide as the
@@ -529,23 +587,32 @@ impl BugController {
             Mode::ToGoal => {
                 if hit && heading.abs() <= TURN_IN_PLACE {
                     // Bug1: hitting again before getting a standoff nearer the goal than the
-                    // leave point is the same obstacle in the way (a notch, a concave side).
+                    // leave point is the same obstacle in the way (a notch, a concave side)
+                    // when the loop left went round the goal; else it is a neighbour, whose
+                    // own loop must then come nearer the goal.
+                    let mut nearer_than = None;
                     if self.mission.algorithm == BugAlgorithm::Bug1
-                        && let Some((_, d)) = self.last_leave
+                        && let Some((_, d, beyond)) = self.last_leave
                         && goal_dist > d - radius
                     {
-                        return self.no_path(
-                            "bug1: the line from the leave point toward the goal re-enters the obstacle",
-                            p,
-                            vehicle,
-                        );
+                        if beyond {
+                            return self.no_path(
+                                "bug1: the line from the leave point toward the goal re-enters the obstacle",
+                                p,
+                                vehicle,
+                            );
+                        }
+                        nearer_than = Some(d);
                     }
                     self.report.hit_points.push(p.to_array());
                     self.follower =
                         WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE)
                             .passing_gaps(vehicle.length, vehicle.width);
                     self.follower.engage();
-                    self.mode = Mode::Follow(Boundary::at_hit(p, goal_dist));
+                    self.mode = Mode::Follow(Boundary {
+                        nearer_than,
+                        ..Boundary::at_hit(p, goal_dist)
+                    });
                     return Decision::Drive(self.follower.command(&b, &pose, dt, radius));
                 }
                 let omega = (K_HEADING * heading).clamp(-TURN_RATE, TURN_RATE);
@@ -588,6 +655,16 @@ impl BugController {
                                 bd.about_turn = std::f64::consts::PI;
                             }
                             bd.leave_at = bd.travelled + ahead.min(behind);
+                            bd.loop_len = bd.travelled;
+                            let ring: Vec<DVec2> = bd.trail.iter().map(|s| s.0).collect();
+                            bd.goal_beyond = beyond_boundary(&ring, goal, self.follower.side());
+                            if bd.nearer_than.is_some_and(|d| bd.closest.1 > d - tol / 2.0) {
+                                return self.no_path(
+                                    "bug1: round a neighbour and back without getting nearer the goal",
+                                    p,
+                                    vehicle,
+                                );
+                            }
                         }
                         // Turning about or leaving waits until a gap being passed is
                         // behind (its sides are nearer than the body's turning circle).
@@ -615,23 +692,46 @@ impl BugController {
                             // farthest excursion of a wobbly path toward the goal, which the
                             // next pass may miss: as close to the goal within half the loop
                             // tolerance counts as there, and so does having followed the
-                            // boundary as far as the closest point lay (Bug1's odometer).
-                            let at_closest = (from_closest <= tol
-                                && (bd.away_from_closest || bd.closest.0 == bd.hit))
-                                || goal_dist <= bd.closest.1 + tol / 2.0
-                                || bd.travelled >= bd.leave_at;
-                            if at_closest && !passing {
-                                if goal_blocked {
-                                    return self.no_path(
-                                        "bug1: the way toward the goal from the closest point is blocked by the same obstacle",
-                                        p,
-                                        vehicle,
-                                    );
-                                }
+                            // boundary as far as the closest point lay (Bug1's odometer) near
+                            // it, where the way toward the goal is open.
+                            let near = from_closest <= tol
+                                && (bd.away_from_closest || bd.closest.0 == bd.hit);
+                            let as_close = near || goal_dist <= bd.closest.1 + tol / 2.0;
+                            let at_closest = as_close
+                                || bd.travelled >= bd.leave_at && from_closest <= 2.0 * tol;
+                            // Blocked there: when the loop went round the goal the same
+                            // obstacle lies in the way, once the robot has passed the closest
+                            // point with the way blocked all along; else a neighbour does,
+                            // and the robot leaves to take it up (just past the point when it
+                            // was passing a gap there).
+                            // Beyond the same boundary, Bug1's odometer says it too.
+                            let passed = bd.near_closest && !near
+                                || bd.goal_beyond && bd.travelled >= bd.leave_at;
+                            bd.near_closest |= near;
+                            let leave = at_closest && !goal_blocked
+                                || (as_close || passed) && !bd.goal_beyond;
+                            if leave && !passing {
                                 self.report.leave_points.push(p.to_array());
-                                self.last_leave = Some((p, goal_dist));
+                                self.last_leave = Some((p, goal_dist, bd.goal_beyond));
                                 self.mode = Mode::ToGoal;
                                 return Decision::Drive(DriveCommand::STOP);
+                            }
+                            if passed && !passing {
+                                return self.no_path(
+                                    "bug1: the way toward the goal from the closest point is blocked by the same obstacle",
+                                    p,
+                                    vehicle,
+                                );
+                            }
+                            // The odometer alone does not find the point again: the way back
+                            // may skip a gap the way out went into (or the other way round).
+                            // Half a loop more and it is lost (the boundary followed changed).
+                            if bd.travelled >= bd.leave_at + bd.loop_len / 2.0 && !passing {
+                                return self.no_path(
+                                    "bug1: the closest point was not met again within half a loop",
+                                    p,
+                                    vehicle,
+                                );
                             }
                         }
                     }
@@ -716,6 +816,49 @@ mod tests {
             }
         }
         None
+    }
+
+    #[test]
+    fn the_goal_lies_beyond_a_loop_round_an_obstacle_inside_it_and_round_a_room_outside() {
+        // A square followed anticlockwise, 0.2 m samples, with a dead-end spike out of its
+        // side.
+        let square = [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0)];
+        let mut ring = Vec::new();
+        for (i, &(x, y)) in square.iter().enumerate() {
+            let (nx, ny) = square[(i + 1) % square.len()];
+            for k in 0..20 {
+                let f = f64::from(k) / 20.0;
+                ring.push(DVec2::new(x + (nx - x) * f, y + (ny - y) * f));
+                if i == 1 && k == 10 {
+                    ring.extend((1..=10).map(|j| DVec2::new(4.0 + 0.2 * f64::from(j), 2.1)));
+                    ring.extend(
+                        (0..10)
+                            .rev()
+                            .map(|j| DVec2::new(4.0 + 0.2 * f64::from(j), 2.1)),
+                    );
+                }
+            }
+        }
+        let (inside, outside, past_spike) = (
+            DVec2::new(2.0, 2.0),
+            DVec2::new(9.0, 2.0),
+            DVec2::new(5.0, 2.0),
+        );
+        assert_eq!(winding(&ring, inside), 1);
+        assert_eq!(winding(&ring, outside), 0);
+        assert_eq!(winding(&ring, past_spike), 0);
+        let back: Vec<DVec2> = ring.iter().rev().copied().collect();
+        assert_eq!(winding(&back, inside), -1);
+        // Anticlockwise with the boundary on the left: round an obstacle. The goal is beyond
+        // it only inside.
+        assert!(beyond_boundary(&ring, inside, Side::Left));
+        assert!(!beyond_boundary(&ring, outside, Side::Left));
+        // Anticlockwise with the boundary on the right: round the inside of a room. The goal
+        // is beyond it only outside.
+        assert!(!beyond_boundary(&ring, inside, Side::Right));
+        assert!(beyond_boundary(&ring, outside, Side::Right));
+        assert!(beyond_boundary(&back, inside, Side::Right));
+        assert_eq!(winding(&[], DVec2::ZERO), 0);
     }
 
     #[test]

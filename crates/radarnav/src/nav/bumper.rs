@@ -27,7 +27,7 @@ use std::fmt;
 
 use glam::DVec2;
 
-use super::nav_pose;
+use super::{nav_pose, scan_pose};
 use crate::map::PoseSource;
 use crate::pose::{Pose, wrap_angle};
 use crate::sensor::{ReturnMode, Scan, SensorConfig, SensorKind};
@@ -349,6 +349,10 @@ pub struct BumperSensor {
     pose: PoseSource,
     /// Remembered returns, believed frame, one per [`MEMORY_CELL`] cell: (point, time seen).
     memory: BTreeMap<(i64, i64), (DVec2, f64)>,
+    /// The believed robot pose when the latest scan was taken.
+    scan_pose: Pose,
+    /// The latest scan's clearance returns in the robot frame of that scan.
+    scan_clearance: Vec<DVec2>,
 }
 
 impl BumperSensor {
@@ -360,6 +364,8 @@ impl BumperSensor {
             bumpers: None,
             pose: PoseSource::Odometry,
             memory: BTreeMap::new(),
+            scan_pose: Pose::default(),
+            scan_clearance: Vec::new(),
         }
     }
 
@@ -375,6 +381,11 @@ impl BumperSensor {
         &self.config
     }
 
+    /// The bumpers as of the last [`BumperSensor::update`] (`None` before the first scan).
+    pub fn latest(&self) -> Option<&Bumpers> {
+        self.bumpers.as_ref()
+    }
+
     /// The safety distance plus the band for `vehicle`: nearer than this, a sector is not free.
     pub fn reach(&self, vehicle: &VehicleSpec) -> f64 {
         self.config.safety_for(vehicle) + self.config.band
@@ -386,12 +397,15 @@ impl BumperSensor {
     }
 
     /// The bumpers from the latest scan of the configured sensor (`None` before its first
-    /// scan, or if the robot has no such sensor).
+    /// scan, or if the robot has no such sensor). The sectors are the scan's; the
+    /// [`Bumpers::clearance`] returns are moved into the robot's frame now: a radar scanning
+    /// at 4 Hz is up to a quarter second old, 10 cm at cruise speed.
     pub fn update(&mut self, input: &ControlInput<'_>) -> Option<&Bumpers> {
         let i = self
             .config
             .sensor_index(input.sensors.iter().map(|s| s.name.as_str()))?;
         let scan = input.scans.get(i)?.as_ref()?;
+        let now = nav_pose(self.pose, input);
         if scan.stamp != self.stamp || self.bumpers.is_none() {
             self.stamp = scan.stamp;
             let c = &self.config;
@@ -404,11 +418,19 @@ impl BumperSensor {
                 c.band,
                 c.rule,
             );
-            let pose = nav_pose(self.pose, input);
+            self.scan_pose = scan_pose(self.pose, input, i).unwrap_or(now);
+            let pose = self.scan_pose;
             self.remember(&mut b, scan, mount, &pose, input.time);
+            self.scan_clearance = std::mem::take(&mut b.clearance);
             self.bumpers = Some(b);
         }
-        self.bumpers.as_ref()
+        let moved = now.inverse().compose(&self.scan_pose);
+        let (turn, shift) = (DVec2::from_angle(moved.yaw), moved.xy());
+        let b = self.bumpers.as_mut()?;
+        b.clearance.clear();
+        b.clearance
+            .extend(self.scan_clearance.iter().map(|&q| shift + turn.rotate(q)));
+        Some(b)
     }
 
     /// Adds the remembered returns the sensor is blind to now to `b`'s clearance, then
@@ -503,6 +525,68 @@ pub(crate) mod tests {
         s.angle_increment = inc;
         s.ranges = (0..n).map(|i| f(-0.5 * span + i as f64 * inc)).collect();
         s
+    }
+
+    #[test]
+    fn clearance_returns_follow_the_robot_between_scans() {
+        use crate::scenario::MountedSensor;
+        use crate::sim::ControlInput;
+        // A radar 1 m from a wall ahead scans; then the robot drives 0.3 m on and turns 90°
+        // left before the next scan. The sectors stay the scan's; the returns the body is
+        // checked against are where the wall is now: 0.7 m away, to the right.
+        let wall_ahead = |a: f64| {
+            if a.cos() > 0.2 {
+                (1.0 / a.cos()) as f32
+            } else {
+                f32::INFINITY
+            }
+        };
+        let mut scan = ring_scan(360, wall_ahead);
+        let sensors = [MountedSensor {
+            name: "radar".into(),
+            config: crate::sensor::preset("radar_thesis").expect("preset"),
+            mount: Pose::default(),
+        }];
+        let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
+        let mut sensor = BumperSensor::new(BumperConfig::default());
+        let at_scan = Pose::default();
+        let moved = Pose::new(0.3, 0.0, 0.0, std::f64::consts::FRAC_PI_2);
+        for (now, pose) in [(at_scan, 0.0), (moved, 0.2)].map(|(p, t)| (t, p)) {
+            scan.pose = at_scan;
+            let scans = [Some(scan.clone())];
+            let input = ControlInput {
+                time: now,
+                odometry: &pose,
+                truth: &pose,
+                bumped: false,
+                scans: &scans,
+                scan_odometry: &[Some(at_scan)],
+                sensors: &sensors,
+                vehicle,
+            };
+            let b = sensor.update(&input).expect("bumpers");
+            let nearest = b
+                .clearance()
+                .iter()
+                .min_by(|p, q| p.length().total_cmp(&q.length()))
+                .expect("returns");
+            if now == 0.0 {
+                assert!(
+                    (*nearest - DVec2::new(1.0, 0.0)).length() < 0.01,
+                    "{nearest}"
+                );
+            } else {
+                assert!(
+                    (*nearest - DVec2::new(0.0, -0.7)).length() < 0.01,
+                    "{nearest}"
+                );
+                assert!(b.corridor_free(0.0, 2.0, 0.3));
+                assert!(!b.corridor_free(-std::f64::consts::FRAC_PI_2, 1.0, 0.3));
+                // The sectors are still the scan's: the wall ahead presses the front one.
+                assert_ne!(b.toward(0.0), BumperState::Clear);
+            }
+            scan.stamp = 0.0;
+        }
     }
 
     #[test]

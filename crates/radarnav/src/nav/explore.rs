@@ -335,6 +335,10 @@ impl Behaviour for ExploreController {
         self.rate_hz
     }
 
+    fn bumpers(&self) -> Option<&Bumpers> {
+        self.bumpers.latest()
+    }
+
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let dt = 1.0 / self.rate_hz;
         if self.mission.strategy == Strategy::Frontier {

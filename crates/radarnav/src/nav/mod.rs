@@ -4,6 +4,7 @@
 pub mod bug;
 pub mod bumper;
 pub mod explore;
+pub mod guard;
 pub mod passage;
 mod teleop;
 pub mod wall_follow;
@@ -20,12 +21,26 @@ use crate::map::PoseSource;
 use crate::pose::Pose;
 use crate::sim::{ControlInput, Controller, Decision};
 use crate::vehicle::DriveCommand;
+use guard::Guarded;
 
 /// The robot pose a controller navigates on: the odometry, or the truth when asked.
 pub fn nav_pose(source: PoseSource, input: &ControlInput<'_>) -> Pose {
     match source {
         PoseSource::Truth => *input.truth,
         PoseSource::Odometry => *input.odometry,
+    }
+}
+
+/// The pose a controller navigates on at the time the latest scan of sensor `i` was taken
+/// (`None` before its first scan).
+pub fn scan_pose(source: PoseSource, input: &ControlInput<'_>, i: usize) -> Option<Pose> {
+    match source {
+        // The scan carries the true pose of the sensor; the robot's is that less the mount.
+        PoseSource::Truth => {
+            let scan = input.scans.get(i)?.as_ref()?;
+            Some(scan.pose.compose(&input.sensors.get(i)?.mount.inverse()))
+        }
+        PoseSource::Odometry => input.scan_odometry.get(i).copied().flatten(),
     }
 }
 
@@ -40,6 +55,10 @@ pub trait Behaviour {
     fn report(&self) -> Option<serde_json::Value> {
         None
     }
+    /// The bumpers it decided on, for the [`guard`] (`None`: its commands go out unchecked).
+    fn bumpers(&self) -> Option<&Bumpers> {
+        None
+    }
 }
 
 /// A behaviour with the reflex of a real bumper: after a refused move, back away from what
@@ -48,6 +67,10 @@ pub trait Behaviour {
 /// bumped: the sensor missed something (foliage the radar crosses whole), so the way it was
 /// going is blocked. A recoil that is refused too (the body wedged between two obstacles)
 /// is cut short and the behaviour decides at once.
+///
+/// Before that reflex comes the [`guard`]: each command of the behaviour is swept against
+/// its bumpers' returns, and one that would touch them is cut to a free part, or stopped
+/// with the behaviour told it bumped.
 #[derive(Clone, Debug)]
 pub struct WithRecoil<B> {
     behaviour: B,
@@ -111,9 +134,20 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
             self.remaining -= 1;
             return Decision::Drive(DriveCommand::twist(self.recoil.0, self.recoil.1));
         }
-        let d = self
+        let mut d = self
             .behaviour
             .decide(input, std::mem::take(&mut self.recoiled));
+        if let (Decision::Drive(cmd), Some(b)) = (d, self.behaviour.bumpers()) {
+            match guard::guard(b.clearance(), input.vehicle, input.vehicle.limit(cmd)) {
+                Guarded::Free => {}
+                Guarded::Replaced(t) => d = Decision::Drive(DriveCommand::Twist(t)),
+                Guarded::Stop => {
+                    // What a bumper would have said a moment later.
+                    self.recoiled = true;
+                    d = Decision::Drive(DriveCommand::STOP);
+                }
+            }
+        }
         if let Decision::Drive(DriveCommand::Twist(t)) = d {
             self.last = (t.v, t.omega);
         }

@@ -65,7 +65,7 @@ const REFINE_COS: f64 = 0.985;
 /// before a Bug's turn on the spot, m/s.
 pub const BACK_SPEED: f64 = 0.1;
 /// Returns inside the body's swept zone that block a move (one may be range noise).
-const HITS_TO_BLOCK: usize = 3;
+pub(crate) const HITS_TO_BLOCK: usize = 3;
 /// Backing out of a gap is straight back once facing through it within this, rad.
 const RETREAT_ALIGNED: f64 = 0.2;
 /// Times the way ahead may block a pass before the gap is given up: backing out and driving

@@ -48,6 +48,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/box-goal.toml"),
     ),
     (
+        "nav/bush-field",
+        include_str!("../../../../scenarios/nav/bush-field.toml"),
+    ),
+    (
         "nav/c-goal",
         include_str!("../../../../scenarios/nav/c-goal.toml"),
     ),
@@ -58,6 +62,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
     (
         "nav/crate-gap",
         include_str!("../../../../scenarios/nav/crate-gap.toml"),
+    ),
+    (
+        "nav/crates-dense",
+        include_str!("../../../../scenarios/nav/crates-dense.toml"),
     ),
     (
         "nav/crates-tight",

@@ -1,0 +1,190 @@
+//! The last check before a command goes out (DESIGN §6): driven by it for a moment, the body
+//! must not touch a return its bumpers hold.
+//!
+//! The behaviours check the way they mean to go (the corridor toward the goal, the turning
+//! circle, the strip through a gap), but a command is an arc: a robot turning away from a
+//! wall beside it swings its rear into a corner it has just passed, and one heading for the
+//! goal past a crate's corner clips it with a front corner while the goal's sector is clear.
+//! So every command is swept along its arc for [`HORIZON`] seconds against the returns
+//! ([`super::Bumpers::clearance`]); one that would bring the body to touch them is replaced
+//! by its straight part, or by its turn on the spot, whichever is free, or else the robot
+//! stops and the behaviour is told it bumped, as a real bumper would have told it a moment
+//! later.
+
+use glam::DVec2;
+
+use super::passage::HITS_TO_BLOCK;
+use crate::pose::Pose;
+use crate::vehicle::{Twist, VehicleSpec, integrate};
+
+/// How far ahead a command is swept, s: past the next control call at 10 Hz, with time to
+/// spare for the one after.
+const HORIZON: f64 = 0.3;
+/// A return nearer the body than this touches it, m.
+const MARGIN: f64 = 0.01;
+/// Already nearer than [`MARGIN`], a move must not bring the body this much nearer still, m.
+const NEARER: f64 = 1e-3;
+/// Largest move and turn between two checked poses of a sweep, m and rad.
+const SWEEP_STEP: (f64, f64) = (0.01, 0.02);
+/// Turns on the spot slower than this are no way out of a blocked arc, rad/s.
+const MIN_TURN: f64 = 0.2;
+
+/// What the guard made of a command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Guarded {
+    /// The command is free.
+    Free,
+    /// The command touches; this part of it is free.
+    Replaced(Twist),
+    /// Neither the command nor a part of it is free: stop.
+    Stop,
+}
+
+/// Distance from the robot-frame point `q` to a body of `length` × `width` m centred on the
+/// robot, m (0 inside it).
+fn body_distance(q: DVec2, length: f64, width: f64) -> f64 {
+    let dx = (q.x.abs() - length / 2.0).max(0.0);
+    let dy = (q.y.abs() - width / 2.0).max(0.0);
+    dx.hypot(dy)
+}
+
+/// The body's clearance among `points` (robot frame) at `pose`: the distance of the
+/// [`HITS_TO_BLOCK`]-th nearest of them to a body of `length` × `width` m there (one or two
+/// may be range noise), m.
+fn clearance(points: &[DVec2], pose: &Pose, length: f64, width: f64) -> f64 {
+    let to_body = pose.inverse();
+    let mut nearest = [f64::INFINITY; HITS_TO_BLOCK];
+    for q in points {
+        let d = body_distance(
+            to_body.compose(&Pose::new(q.x, q.y, 0.0, 0.0)).xy(),
+            length,
+            width,
+        );
+        if d < nearest[HITS_TO_BLOCK - 1] {
+            nearest[HITS_TO_BLOCK - 1] = d;
+            nearest.sort_by(f64::total_cmp);
+        }
+    }
+    nearest[HITS_TO_BLOCK - 1]
+}
+
+/// Whether a body of `length` × `width` m driven by `t` for [`HORIZON`] seconds comes nearer
+/// the robot-frame returns `points` than [`MARGIN`] (its [`clearance`]), or, already that
+/// near, nearer than it is now: a robot beside a wall may drive along it, not turn into it.
+pub fn sweep_touches(points: &[DVec2], length: f64, width: f64, t: Twist) -> bool {
+    if t.v == 0.0 && t.omega == 0.0 {
+        return false;
+    }
+    let reach = 0.5 * length.hypot(width) + t.v.abs() * HORIZON + MARGIN;
+    let near: Vec<DVec2> = points
+        .iter()
+        .copied()
+        .filter(|q| q.length() <= reach)
+        .collect();
+    let floor = MARGIN.min(clearance(&near, &Pose::default(), length, width) - NEARER);
+    let n = ((t.v.abs() * HORIZON / SWEEP_STEP.0).max(t.omega.abs() * HORIZON / SWEEP_STEP.1))
+        .ceil()
+        .max(1.0) as usize;
+    (1..=n).any(|k| {
+        let pose = integrate(&Pose::default(), t, HORIZON * k as f64 / n as f64);
+        clearance(&near, &pose, length, width) < floor
+    })
+}
+
+/// Checks the (limited) command `t` of a robot `vehicle` among the robot-frame returns
+/// `points`: free, or a free part of it (straight on, or the turn on the spot), or stop.
+pub fn guard(points: &[DVec2], vehicle: &VehicleSpec, t: Twist) -> Guarded {
+    let touches = |t: Twist| sweep_touches(points, vehicle.length, vehicle.width, t);
+    if !touches(t) {
+        return Guarded::Free;
+    }
+    let straight = Twist { omega: 0.0, ..t };
+    let turn = Twist { v: 0.0, ..t };
+    if t.v != 0.0 && t.omega != 0.0 && !touches(straight) {
+        Guarded::Replaced(straight)
+    } else if t.v != 0.0 && t.omega.abs() >= MIN_TURN && !touches(turn) {
+        Guarded::Replaced(turn)
+    } else {
+        Guarded::Stop
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const L: f64 = 0.6;
+    const W: f64 = 0.5;
+
+    /// Points every 5 mm along the segment from `a` to `b`.
+    fn edge(a: DVec2, b: DVec2) -> Vec<DVec2> {
+        let n = ((b - a).length() / 0.005).ceil() as usize;
+        (0..=n)
+            .map(|k| a + (b - a) * (k as f64 / n as f64))
+            .collect()
+    }
+
+    fn twist(v: f64, omega: f64) -> Twist {
+        Twist { v, omega }
+    }
+
+    #[test]
+    fn a_wall_ahead_stops_a_move_toward_it_once_the_move_would_reach_it() {
+        // A wall across the way, 0.1 m ahead of the front face.
+        let wall = edge(DVec2::new(0.4, -1.0), DVec2::new(0.4, 1.0));
+        // 0.3 s at 0.4 m/s covers 0.12 m: it would touch; at 0.2 m/s (6 cm) it would not.
+        assert!(sweep_touches(&wall, L, W, twist(0.4, 0.0)));
+        assert!(!sweep_touches(&wall, L, W, twist(0.2, 0.0)));
+        // Backing away, or turning on the spot (the corners sweep a 0.39 m circle), is free.
+        assert!(!sweep_touches(&wall, L, W, twist(-0.4, 0.0)));
+        assert!(!sweep_touches(&wall, L, W, twist(0.0, 0.8)));
+    }
+
+    #[test]
+    fn driving_along_a_wall_beside_the_body_is_free_and_turning_into_it_is_not() {
+        // A wall on the right, 5 mm from the body's side.
+        let wall = edge(DVec2::new(-2.0, -0.255), DVec2::new(2.0, -0.255));
+        assert!(!sweep_touches(&wall, L, W, twist(0.4, 0.0)));
+        assert!(!sweep_touches(&wall, L, W, twist(-0.4, 0.0)));
+        // Turning either way swings a corner into it.
+        assert!(sweep_touches(&wall, L, W, twist(0.0, 0.8)));
+        assert!(sweep_touches(&wall, L, W, twist(0.0, -0.8)));
+    }
+
+    #[test]
+    fn an_arc_that_swings_the_rear_into_a_corner_goes_straight_on_instead() {
+        // A corner 2 cm to the right of the body's side, behind its middle: turning left on
+        // the move swings the rear right into it, straight on passes it.
+        let v = crate::vehicle::vehicle("p3at").expect("p3at");
+        let (l, w) = (v.length, v.width);
+        let side = -(w / 2.0 + 0.02);
+        let corner = [
+            edge(DVec2::new(-0.1, side), DVec2::new(-0.1, side - 0.7)),
+            edge(DVec2::new(-0.1, side), DVec2::new(-1.0, side)),
+        ]
+        .concat();
+        assert!(sweep_touches(&corner, l, w, twist(0.24, 0.32)));
+        assert_eq!(
+            guard(&corner, v, twist(0.24, 0.32)),
+            Guarded::Replaced(twist(0.24, 0.0))
+        );
+        // Nothing near: free. Boxed in on every side: stop.
+        assert_eq!(guard(&[], v, twist(0.24, 0.32)), Guarded::Free);
+        let (hl, hw) = (l / 2.0 + 0.005, w / 2.0 + 0.005);
+        let boxed = [
+            edge(DVec2::new(-hl, -hw), DVec2::new(hl, -hw)),
+            edge(DVec2::new(hl, -hw), DVec2::new(hl, hw)),
+            edge(DVec2::new(hl, hw), DVec2::new(-hl, hw)),
+            edge(DVec2::new(-hl, hw), DVec2::new(-hl, -hw)),
+        ]
+        .concat();
+        assert_eq!(guard(&boxed, v, twist(0.24, 0.32)), Guarded::Stop);
+        assert_eq!(guard(&boxed, v, twist(0.0, 0.8)), Guarded::Stop);
+    }
+
+    #[test]
+    fn a_single_stray_return_does_not_stop_the_robot() {
+        let stray = [DVec2::new(0.35, 0.0)];
+        assert!(!sweep_touches(&stray, L, W, twist(0.4, 0.0)));
+    }
+}
