@@ -322,8 +322,8 @@ pub struct BugController {
     mode: Mode,
     start: Option<DVec2>,
     last: Option<DVec2>,
-    /// Bug1: the last leave point, its distance to the goal, and whether the loop it was
-    /// left from went round the goal.
+    /// Bug1: the last leave point, its distance to the goal, and whether the goal lay beyond
+    /// the boundary of the loop it was left from.
     last_leave: Option<(DVec2, f64, bool)>,
     /// Where the robot last stood still and since when (s): the no-progress watchdog.
     still: Option<(DVec2, f64)>,
