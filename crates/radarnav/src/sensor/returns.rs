@@ -139,9 +139,29 @@ impl SensorConfig {
         } = tracer;
         echoes.clear();
         spans.clear();
-        for (b, &el) in beam.iter().zip(el_sin_cos) {
-            let ray = beam_ray(pose, az + b.d_az, el, b.lateral);
+        let rays = beam.len();
+        // A selection that does not look at the echoes (one ray; `uniform`, drawn before the
+        // walk) is made first, and only the answering ray is walked: the others' echoes would
+        // be thrown away. The thesis radar's three side beams cost one walk, not three.
+        let fixed = match sig.selection {
+            _ if rays == 1 => Some(0),
+            Selection::Uniform => Some(match select {
+                Some(u) => ((u * rays as f64) as usize).min(rays - 1),
+                None => match side {
+                    Beam::Center => 0,
+                    Beam::Left => 1,
+                    Beam::Right => 2,
+                },
+            }),
+            _ => None,
+        };
+        for (r, (b, &el)) in beam.iter().zip(el_sin_cos).enumerate() {
             let start = echoes.len();
+            if fixed.is_some_and(|c| c != r) {
+                spans.push((start, 1.0));
+                continue;
+            }
+            let ray = beam_ray(pose, az + b.d_az, el, b.lateral);
             let (w, max) = (b.weight, self.range_max);
             let cos = match fan {
                 Some(fan) => {
@@ -166,17 +186,8 @@ impl SensorConfig {
         }
         spans.push((echoes.len(), 0.0));
         let of = |r: usize| &echoes[spans[r].0..spans[r + 1].0];
-        let rays = beam.len();
-        let chosen = match sig.selection {
-            _ if rays == 1 => 0,
-            Selection::Uniform => match select {
-                Some(u) => ((u * rays as f64) as usize).min(rays - 1),
-                None => match side {
-                    Beam::Center => 0,
-                    Beam::Left => 1,
-                    Beam::Right => 2,
-                },
-            },
+        // The selections that look at the echoes (`uniform` was made above).
+        let chosen = fixed.unwrap_or_else(|| match sig.selection {
             Selection::IncidenceWeighted => {
                 let total: f64 = spans[..rays].iter().map(|s| s.1).sum();
                 let u = select.unwrap_or(0.0) * total;
@@ -192,7 +203,7 @@ impl SensorConfig {
                 .filter_map(|r| of(r).first().map(|e| (r, e.range)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map_or(0, |x| x.0),
-            Selection::Strongest => (0..rays)
+            Selection::Strongest | Selection::Uniform => (0..rays)
                 .filter_map(|r| {
                     of(r)
                         .iter()
@@ -202,7 +213,7 @@ impl SensorConfig {
                 })
                 .max_by(|a, b| a.1.total_cmp(&b.1))
                 .map_or(0, |x| x.0),
-        };
+        });
         let mine = of(chosen);
         let pick = match sig.return_mode {
             ReturnMode::Strongest => mine.iter().max_by(|a, b| a.power_db.total_cmp(&b.power_db)),
@@ -332,6 +343,44 @@ mod tests {
                     .any(|(x, y)| (x - y).abs() > 0.1)
             );
         }
+    }
+
+    /// With side beams and `uniform` selection only the drawn ray is walked: each azimuth of
+    /// an `all` scan reports exactly the echoes that ray alone gives (above the threshold, by
+    /// range, at most `max_echoes`), whichever side it is.
+    #[test]
+    fn uniform_selection_reports_the_echoes_of_the_drawn_side_beam() {
+        let objects: Vec<(Shape, &str)> = (0..30)
+            .map(|k| {
+                let a = k as f64 * 0.21;
+                let r = 1.5 + (k % 5) as f64 * 0.7;
+                post(r * a.cos(), r * a.sin(), 0.05 + 0.03 * (k % 3) as f64)
+            })
+            .collect();
+        let world = world_of(&objects);
+        let mut c = preset("radar_thesis_n100").expect("preset");
+        c.signal.return_mode = ReturnMode::All;
+        c.signal.detection_threshold_db = -70.0;
+        let s = scan(&c, &world, 9);
+        let model = c.signal.echo_model();
+        let mut tracer = super::super::echo::EchoTracer::default();
+        let mut sides = std::collections::BTreeSet::new();
+        let mut echoes = 0;
+        for i in 0..s.len() {
+            let (az, el) = s.angles(i);
+            let offset = s.beams[i].side() * c.side_beam_offset;
+            let ray = beam_ray(&s.pose, az, el.sin_cos(), offset);
+            let mut alone = Vec::new();
+            tracer.echoes(&world, &ray, 1.0 / 3.0, c.range_max, &model, &mut alone);
+            alone.retain(|e| e.power_db >= c.signal.detection_threshold_db);
+            alone.sort_by(|a, b| a.range.total_cmp(&b.range));
+            alone.truncate(c.signal.max_echoes);
+            assert_eq!(s.echoes_of(i), &alone[..], "azimuth {i}");
+            sides.insert(s.beams[i].as_str());
+            echoes += alone.len();
+        }
+        assert_eq!(sides.len(), 3, "every side beam drawn somewhere");
+        assert!(echoes > 50, "{echoes} echoes");
     }
 
     /// A thin pole shows in exactly the azimuths whose beam rays pass within its angular
