@@ -107,6 +107,12 @@ limits! {
     SIZE = "radius, size, height, thickness" in "object": 1e-3, 1e4, "m", "1 mm to 10 km";
     /// Points of a wall polyline or a prism polygon.
     POINTS = "points, polygon (count)" in "object": 2.0, 1e4, "", "polygon needs 3";
+    /// Scale of a mesh file's units to metres.
+    MESH_SCALE = "mesh scale" in "object": 1e-4, 1e4, "", "0.1 mm to 10 km per file unit";
+    /// Triangles of one mesh part.
+    MESH_TRIANGLES = "mesh triangles (count)" in "object": 1.0, 5e6, "", "about 200 bytes a triangle while it is built";
+    /// Size of a mesh file (and of each `.bin` or `.mtl` it names).
+    MESH_FILE = "mesh file (size)" in "object": 0.0, 256.0, "MiB", "read in whole";
     /// Objects in a scenario.
     OBJECTS = "[[object]] (count)" in "scenario": 0.0, 1e6, "", "the ray-query benchmarks use 100 000";
     /// Any angle given in degrees as a heading.

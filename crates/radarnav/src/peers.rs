@@ -202,7 +202,7 @@ pub fn write_scene(
                     });
                 }
             }
-            Shape::Prism { .. } => skipped += 1,
+            Shape::Prism { .. } | Shape::Mesh(_) => skipped += 1,
         }
     }
     let meta = SceneMeta {

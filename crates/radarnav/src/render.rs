@@ -68,6 +68,10 @@ fn darker(rgb: [u8; 3]) -> [u8; 3] {
 }
 
 /// Draw order and opacity: clouds first and see-through, foliage next, solids on top.
+/// Height at which figures cut meshes, m: the scan plane of the sensors on the P3AT (and of
+/// the thesis' figures).
+pub const SECTION_Z: f64 = 0.4;
+
 fn layer(world: &World, id: MaterialId) -> (u8, u8) {
     let m = world.materials().get(id);
     if m.traversable {
@@ -242,8 +246,21 @@ impl Figure {
             let (_, alpha) = layer(world, obj.material);
             let rgb = world.materials().get(obj.material).color;
             let (fill, line) = (paint(rgb, alpha), paint(darker(rgb), alpha));
-            for part in obj.shape.footprint() {
-                self.polygon(&part, &fill, Some(&line));
+            match obj.shape.section(SECTION_Z) {
+                // A mesh: its outline faint, and solid where a level scan meets it.
+                Some(cut) => {
+                    for part in obj.shape.footprint() {
+                        self.polygon(&part, &paint(rgb, alpha / 4), Some(&line));
+                    }
+                    for part in cut {
+                        self.polygon(&part, &fill, Some(&line));
+                    }
+                }
+                None => {
+                    for part in obj.shape.footprint() {
+                        self.polygon(&part, &fill, Some(&line));
+                    }
+                }
             }
         }
         let mut used: Vec<MaterialId> = world.objects().iter().map(|o| o.material).collect();

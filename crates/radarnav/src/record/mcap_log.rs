@@ -37,8 +37,8 @@ use foxglove::Encode;
 use foxglove::schemas::{
     Color, CompressedImage, CubePrimitive, CylinderPrimitive, FrameTransform, Grid as FgGrid,
     LaserScan, LinePrimitive, PackedElementField, Point3, PointCloud, Pose as FgPose, PoseInFrame,
-    PosesInFrame, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Timestamp, Vector2,
-    Vector3, line_primitive, packed_element_field::NumericType,
+    PosesInFrame, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive, Timestamp,
+    TriangleListPrimitive, Vector2, Vector3, line_primitive, packed_element_field::NumericType,
 };
 
 use super::RecordError;
@@ -481,6 +481,19 @@ fn world_scene(world: &World) -> SceneUpdate {
                     color: c,
                 }),
                 Shape::Wall { segments, .. } => e.cubes.extend(segments.iter().map(cube)),
+                Shape::Mesh(m) => e.triangles.push(TriangleListPrimitive {
+                    pose: Some(fg_pose(&Pose::default())),
+                    points: (m.vertices().iter())
+                        .map(|v| Point3 {
+                            x: v.x,
+                            y: v.y,
+                            z: v.z,
+                        })
+                        .collect(),
+                    color: c,
+                    indices: m.triangles().iter().flatten().copied().collect(),
+                    ..Default::default()
+                }),
                 Shape::Prism {
                     polygon,
                     z_min,

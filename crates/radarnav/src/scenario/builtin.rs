@@ -7,6 +7,11 @@ pub const BUILTIN_SCENARIOS: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/foliage-wall.toml"),
     ),
     (
+        "foliage-wall-mesh",
+        include_str!("../../../../scenarios/foliage-wall-mesh.toml"),
+    ),
+    ("forest", include_str!("../../../../scenarios/forest.toml")),
+    (
         "smoke-room",
         include_str!("../../../../scenarios/smoke-room.toml"),
     ),

@@ -22,6 +22,7 @@
 //! ```
 
 mod builtin;
+pub mod mesh_file;
 pub mod spec;
 
 pub use builtin::{BUILTIN_SCENARIOS, NAV_SUITE, builtin_source};
@@ -140,6 +141,8 @@ pub struct Scenario {
 struct Ctx<'a> {
     src: &'a str,
     file: &'a str,
+    /// Where files the scenario names (meshes) are looked for: beside it.
+    dir: &'a std::path::Path,
 }
 
 impl Ctx<'_> {
@@ -184,9 +187,13 @@ fn key_at(src: &str, span: &Range<usize>) -> Option<String> {
 }
 
 impl Scenario {
-    /// Parses and checks a scenario. `file` is only used in error messages.
+    /// Parses and checks a scenario. `file` names it in error messages, and files it names
+    /// (meshes) are looked for beside it.
     pub fn from_toml(src: &str, file: &str, name: &str) -> Result<Scenario, ScenarioError> {
-        let ctx = Ctx { src, file };
+        let dir = std::path::Path::new(file)
+            .parent()
+            .unwrap_or(std::path::Path::new(""));
+        let ctx = Ctx { src, file, dir };
         let spec: ScenarioSpec = toml::from_str(src).map_err(|e| {
             ctx.err(
                 e.span().unwrap_or(0..0),
@@ -195,11 +202,10 @@ impl Scenario {
             )
         })?;
         let materials = build_materials(&ctx, &spec)?;
-        let objects = spec
-            .objects
-            .iter()
-            .map(|o| build_object(&ctx, &materials, o))
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut objects = Vec::with_capacity(spec.objects.len());
+        for o in &spec.objects {
+            objects.extend(build_object(&ctx, &materials, o)?);
+        }
         let mut robots: Vec<Robot> = Vec::new();
         for r in &spec.robots {
             let robot = build_robot(&ctx, r)?;
@@ -425,11 +431,12 @@ fn xy(points: &[Xy]) -> Vec<DVec2> {
     points.iter().map(|p| DVec2::new(p[0].0, p[1].0)).collect()
 }
 
+/// The objects of one `[[object]]`: one, or one per named part of a mesh file.
 fn build_object(
     ctx: &Ctx,
     materials: &MaterialTable,
     o: &Spanned<ObjectSpec>,
-) -> Result<Object, ScenarioError> {
+) -> Result<Vec<Object>, ScenarioError> {
     let span = o.span();
     let spec = o.get_ref();
     let material = materials.id(spec.material.get_ref()).ok_or_else(|| {
@@ -445,6 +452,7 @@ fn build_object(
         spec.cylinder.is_some(),
         spec.wall.is_some(),
         spec.prism.is_some(),
+        spec.mesh.is_some(),
     ]
     .iter()
     .filter(|g| **g)
@@ -453,8 +461,11 @@ fn build_object(
         return Err(ctx.err(
             span,
             None,
-            format!("an object needs exactly one shape (sphere, box, cylinder, wall or prism), found {given}"),
+            format!("an object needs exactly one shape (sphere, box, cylinder, wall, prism or mesh), found {given}"),
         ));
+    }
+    if let Some(m) = &spec.mesh {
+        return build_mesh(ctx, materials, spec, material, m);
     }
     let (shape, shape_span) = if let Some(s) = &spec.sphere {
         (
@@ -492,11 +503,152 @@ fn build_object(
         unreachable!("exactly one shape was checked above")
     };
     let shape = shape.map_err(|e| ctx.err(shape_span, None, e.to_string()))?;
-    Ok(Object {
+    Ok(vec![Object {
         name: spec.name.clone(),
         shape,
         material,
-    })
+    }])
+}
+
+/// A `mesh` object: the file read and placed, one object per part (by the material names the
+/// file gives its faces, through `materials`); an open part must be of a material no ray can
+/// enter.
+fn build_mesh(
+    ctx: &Ctx,
+    materials: &MaterialTable,
+    spec: &ObjectSpec,
+    material: crate::world::MaterialId,
+    m: &Spanned<spec::MeshSpec>,
+) -> Result<Vec<Object>, ScenarioError> {
+    use crate::world::procedural::{BARK, Plant, grow};
+    use mesh_file::{Placement, Up};
+    let ms = m.get_ref();
+    let (source, source_span) = match (&ms.file, &ms.generate) {
+        (Some(f), None) => (f.get_ref().clone(), f.span()),
+        (None, Some(g)) => (format!("generated {}", g.get_ref()), g.span()),
+        _ => {
+            return Err(ctx.err(
+                m.span(),
+                None,
+                "a mesh needs exactly one of `file` (an OBJ or glTF file) or `generate` (\"tree\" or \"bush\")",
+            ));
+        }
+    };
+    let gltf = [".gltf", ".glb"]
+        .iter()
+        .any(|e| source.to_ascii_lowercase().ends_with(e));
+    let up = match ms.up.as_ref().map(|u| (u.get_ref().as_str(), u.span())) {
+        None if gltf => Up::Y,
+        None => Up::Z,
+        Some(("z", _)) => Up::Z,
+        Some(("y", _)) => Up::Y,
+        Some((other, span)) => {
+            return Err(ctx.err(
+                span,
+                Some("up"),
+                format!("expected \"z\" or \"y\", found `{other}`"),
+            ));
+        }
+    };
+    let placement = Placement {
+        up,
+        scale: ms.scale.0,
+        yaw: ms.yaw_deg.0.to_radians(),
+        center: ms.center.as_ref().map_or(DVec3::ZERO, |c| center(c, 0.0)),
+    };
+    let path = ctx.dir.join(&source);
+    let parts = match &ms.generate {
+        Some(g) => {
+            let plant = Plant::parse(g.get_ref()).ok_or_else(|| {
+                ctx.err(
+                    g.span(),
+                    Some("generate"),
+                    format!("expected \"tree\" or \"bush\", found `{}`", g.get_ref()),
+                )
+            })?;
+            let height = ms.height.map_or(plant.default_height(), |h| h.0);
+            placement.place(grow(plant, height, ms.seed.unwrap_or(1)))
+        }
+        None => mesh_file::load(&path, &placement)
+            .map_err(|e| ctx.err(source_span.clone(), Some("file"), e))?,
+    };
+    for name in ms.materials.keys() {
+        if !parts
+            .iter()
+            .any(|p| p.material.as_deref() == Some(name.as_str()))
+        {
+            let known: Vec<&str> = parts.iter().filter_map(|p| p.material.as_deref()).collect();
+            return Err(ctx.err(
+                ms.materials[name].span(),
+                Some(name),
+                format!(
+                    "the file has no part `{name}`; its parts: {}",
+                    if known.is_empty() {
+                        "(none named)".to_owned()
+                    } else {
+                        known.join(", ")
+                    }
+                ),
+            ));
+        }
+    }
+    let mut out = Vec::with_capacity(parts.len());
+    for part in parts {
+        let (id, where_) = match part.material.as_ref().and_then(|n| ms.materials.get(n)) {
+            Some(name) => {
+                let id = materials.id(name.get_ref()).ok_or_else(|| {
+                    ctx.err(
+                        name.span(),
+                        None,
+                        unknown_material(name.get_ref(), materials),
+                    )
+                })?;
+                (id, name.span())
+            }
+            // A generated plant's wood is wood unless said otherwise.
+            None if ms.generate.is_some() && part.material.as_deref() == Some(BARK) => (
+                materials.id("wood").unwrap_or(material),
+                spec.material.span(),
+            ),
+            None => (material, spec.material.span()),
+        };
+        let label = part
+            .material
+            .clone()
+            .unwrap_or_else(|| "(unnamed)".to_owned());
+        let mesh =
+            crate::world::mesh::TriMesh::new(part.vertices, part.triangles).map_err(|e| {
+                ctx.err(
+                    source_span.clone(),
+                    None,
+                    format!("{source}: part {label}: {e}"),
+                )
+            })?;
+        let mat = materials.get(id);
+        let enterable = [crate::world::Band::Radar, crate::world::Band::Laser]
+            .iter()
+            .any(|&b| !mat.attenuation_db_per_m(b).is_infinite());
+        if enterable && !mesh.is_closed() {
+            return Err(ctx.err(
+                where_,
+                None,
+                format!(
+                    "{source}: part {label} is not closed ({}), but material `{}` can be entered by a ray: a penetrable mesh must be closed (watertight)",
+                    mesh.why_open(),
+                    mat.name
+                ),
+            ));
+        }
+        out.push(Object {
+            name: match (&spec.name, &part.material) {
+                (Some(n), Some(p)) => Some(format!("{n}/{p}")),
+                (n, _) => n.clone(),
+            },
+            shape: Shape::Mesh(std::sync::Arc::new(mesh)),
+            material: id,
+        });
+    }
+    Ok(out)
 }
 
 fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, ScenarioError> {

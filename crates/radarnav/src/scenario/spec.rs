@@ -27,6 +27,8 @@ checked_f64! {
     Coord: limits::COORD;
     /// A size, m.
     Size: limits::SIZE;
+    /// A mesh file's scale.
+    MeshScale: limits::MESH_SCALE;
     /// A heading, degrees.
     Yaw: limits::YAW;
     /// A sensor's offset on the robot, m.
@@ -348,6 +350,41 @@ pub struct ObjectSpec {
     pub wall: Option<Spanned<WallSpec>>,
     /// `prism = { polygon, z_min, z_max }`.
     pub prism: Option<Spanned<PrismSpec>>,
+    /// `mesh = { file, scale, yaw_deg, center, up, materials }`.
+    pub mesh: Option<Spanned<MeshSpec>>,
+}
+
+/// Mesh fields: a `file`, or a plant to `generate`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// OBJ or glTF file, relative to the scenario file.
+    pub file: Option<Spanned<String>>,
+    /// A seeded plant instead of a file: `"tree"` or `"bush"` (parts `bark`, `leaves`).
+    pub generate: Option<Spanned<String>>,
+    /// Seed of a generated plant (default 1).
+    pub seed: Option<u64>,
+    /// Height of a generated plant, m (default: tree 5, bush 1.2).
+    pub height: Option<Size>,
+    /// File units to metres (default 1).
+    #[serde(default = "unit_scale")]
+    pub scale: MeshScale,
+    /// Rotation about z, degrees.
+    #[serde(default = "zero")]
+    pub yaw_deg: Yaw,
+    /// Where the file's origin goes; `[x, y]` puts it on the ground (default the world's
+    /// origin).
+    pub center: Option<Center>,
+    /// The file's up axis, `"z"` or `"y"` (default: `"y"` for glTF, `"z"` for OBJ).
+    pub up: Option<Spanned<String>>,
+    /// Material of each part by the name the file gives it (`leaves = "foliage_dense"`);
+    /// parts not named here take the object's material.
+    #[serde(default)]
+    pub materials: std::collections::BTreeMap<String, Spanned<String>>,
+}
+
+fn unit_scale() -> MeshScale {
+    MeshScale(1.0)
 }
 
 /// Sphere fields.

@@ -478,3 +478,131 @@ fn bug_and_explore_mission_errors_name_the_key() {
         "{x}"
     );
 }
+
+/// A directory of mesh files for the mesh tests: a trunk cube (`bark`) under a crown cube
+/// (`leaves`), each closed, with its MTL; and one open square.
+fn mesh_dir() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("radarnav-scenario-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cube = |z: u32| {
+        let v: String = (0..8)
+            .map(|i| format!("v {} {} {}\n", i & 1, (i >> 1) & 1, z + ((i >> 2) & 1)))
+            .collect();
+        v
+    };
+    let faces = |o: u32| {
+        [
+            [1, 3, 4, 2],
+            [5, 6, 8, 7],
+            [1, 2, 6, 5],
+            [3, 7, 8, 4],
+            [1, 5, 7, 3],
+            [2, 4, 8, 6],
+        ]
+        .iter()
+        .map(|f| format!("f {} {} {} {}\n", f[0] + o, f[1] + o, f[2] + o, f[3] + o))
+        .collect::<String>()
+    };
+    std::fs::write(
+        dir.join("cube.obj"),
+        format!(
+            "mtllib cube.mtl\n{}{}usemtl bark\n{}usemtl leaves\n{}",
+            cube(0),
+            cube(1),
+            faces(0),
+            faces(8)
+        ),
+    )
+    .unwrap();
+    std::fs::write(dir.join("cube.mtl"), "newmtl bark\nnewmtl leaves\n").unwrap();
+    std::fs::write(dir.join("sheet.obj"), format!("{}f 1 2 6 5\n", cube(0))).unwrap();
+    dir
+}
+
+fn parse_in(dir: &std::path::Path, src: &str) -> Result<Scenario, ScenarioError> {
+    let file = dir.join("scene.toml");
+    Scenario::from_toml(src, &file.to_string_lossy(), "scene")
+}
+
+#[test]
+fn a_mesh_is_read_beside_the_scenario_placed_and_split_into_its_parts() {
+    let dir = mesh_dir();
+    let s = parse_in(
+        &dir,
+        &format!(
+            "[[object]]\nname = \"shrub\"\nmaterial = \"wood\"\n\
+             mesh = {{ file = \"cube.obj\", scale = 2.0, center = [5, 1], materials = {{ leaves = \"foliage_dense\" }} }}\n\
+             [[object]]\nmaterial = \"concrete\"\nmesh = {{ file = \"sheet.obj\", yaw_deg = 90 }}\n{ROBOT}"
+        ),
+    )
+    .unwrap();
+    let objs = s.world.objects();
+    let names: Vec<_> = objs.iter().map(|o| o.name.clone()).collect();
+    assert_eq!(
+        names,
+        [
+            Some("shrub/bark".to_owned()),
+            Some("shrub/leaves".to_owned()),
+            None
+        ]
+    );
+    let m = s.world.materials();
+    assert_eq!(objs[0].material, m.id("wood").unwrap());
+    assert_eq!(objs[1].material, m.id("foliage_dense").unwrap());
+    let (lo, hi) = objs[0].shape.aabb();
+    assert_eq!(
+        (lo, hi),
+        (DVec3::new(5.0, 1.0, 0.0), DVec3::new(7.0, 3.0, 2.0))
+    );
+    // The crown, 2 m up to 4 m, is a volume: a level ray crosses 2 m of it.
+    let ray = crate::world::Ray::new(DVec3::new(0.0, 2.0, 3.0), DVec3::X);
+    let mut iv = Vec::new();
+    objs[1].shape.ray_intervals(&ray, &mut iv);
+    assert_eq!(iv, [(5.0, 7.0)]);
+    // The sheet turned 90°: it now stands in the y-z plane at x = 0.
+    let (lo, hi) = objs[2].shape.aabb();
+    assert!(lo.x.abs() < 1e-12 && hi.x.abs() < 1e-12, "{lo} {hi}");
+}
+
+#[test]
+fn mesh_errors_name_the_file_the_part_and_the_key() {
+    let dir = mesh_dir();
+    let e = parse_in(
+        &dir,
+        "[[object]]\nmaterial = \"wood\"\nmesh = { file = \"nope.obj\" }\n",
+    )
+    .unwrap_err();
+    assert_eq!((e.line, e.key.as_deref()), (3, Some("file")));
+    assert!(e.message.contains("nope.obj"), "{e}");
+    // A foliage sheet: a ray could enter it, but it has no inside.
+    let e = parse_in(
+        &dir,
+        "[[object]]\nmaterial = \"foliage_light\"\nmesh = { file = \"sheet.obj\" }\n",
+    )
+    .unwrap_err();
+    assert!(
+        e.message.contains("must be closed") && e.message.contains("4 edges"),
+        "{e}"
+    );
+    let e = parse_in(
+        &dir,
+        "[[object]]\nmaterial = \"wood\"\nmesh = { file = \"cube.obj\", materials = { crown = \"foliage_dense\" } }\n",
+    )
+    .unwrap_err();
+    assert!(
+        e.message.contains("no part `crown`") && e.message.contains("bark, leaves"),
+        "{e}"
+    );
+    let e = parse_in(
+        &dir,
+        "[[object]]\nmaterial = \"wood\"\nmesh = { file = \"cube.obj\", up = \"x\" }\n",
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("up"));
+    let e = parse_in(
+        &dir,
+        "[[object]]\nmaterial = \"wood\"\nmesh = { file = \"cube.obj\", scale = 0 }\n",
+    )
+    .unwrap_err();
+    assert!(e.message.contains("0.0001 to 10000"), "{e}");
+}

@@ -317,6 +317,65 @@ mod tests {
         Shape::sphere(DVec3::new(x, y, 1.0), r).unwrap()
     }
 
+    /// A penetrable crown mesh spends the budget over its chord as the sphere it tessellates
+    /// does: a 3 dB budget in a dense crown (3 dB/m) runs out 1 m in, whichever of the two;
+    /// a laser stops at its surface; a body overlapping it is blocked.
+    #[test]
+    fn a_crown_mesh_spends_the_budget_like_its_sphere() {
+        let mesh = crate::world::mesh::tests::uv_sphere(DVec3::new(5.0, 0.0, 1.0), 1.5, 48, 96);
+        let mesh = Shape::Mesh(std::sync::Arc::new(mesh));
+        let analytic = sphere(5.0, 0.0, 1.5);
+        let mut t = Tracer::default();
+        for y in [0.0, 0.4, -0.7, 1.1] {
+            let a = t.trace(
+                &world(&[(analytic.clone(), "foliage_dense")]),
+                &x_ray(y),
+                Band::Radar,
+                3.0,
+                30.0,
+            );
+            let m = t.trace(
+                &world(&[(mesh.clone(), "foliage_dense")]),
+                &x_ray(y),
+                Band::Radar,
+                3.0,
+                30.0,
+            );
+            assert_eq!(
+                (a.kind, m.kind),
+                (HitKind::Exhausted, HitKind::Exhausted),
+                "y {y}"
+            );
+            // The mesh lies inside the sphere by at most 1.5 (1 − cos(π/48)) ≈ 3.2 mm radially.
+            assert!(
+                (a.range - m.range).abs() < 0.01,
+                "y {y}: {} vs {}",
+                a.range,
+                m.range
+            );
+            let entry = 5.0 - (1.5f64 * 1.5 - y * y).sqrt();
+            assert!((a.range - (entry + 1.0)).abs() < 1e-9);
+            let l = t.trace(
+                &world(&[(mesh.clone(), "foliage_dense")]),
+                &x_ray(y),
+                Band::Laser,
+                3.0,
+                30.0,
+            );
+            assert_eq!(l.kind, HitKind::Solid);
+            assert!((l.range - entry).abs() < 0.01, "laser {}", l.range);
+        }
+        let w = world(&[(mesh, "wood")]);
+        let body = |x: f64| crate::world::overlap::body_box(x, 0.0, 0.3, 0.5, 0.5, 0.3);
+        assert_eq!(w.blocking_object(&body(3.5)), Some(0));
+        assert_eq!(
+            w.blocking_object(&body(5.0)),
+            Some(0),
+            "inside the closed mesh"
+        );
+        assert_eq!(w.blocking_object(&body(2.9)), None);
+    }
+
     #[test]
     fn budget_runs_out_at_the_exact_depth() {
         // foliage_dense is 3 dB/m: a 1.5 dB budget lasts 0.5 m past the entry at x = 4.

@@ -145,7 +145,7 @@ impl World {
                 Shape::Wall { segments, .. } => {
                     covering_arc(o, &segments[segment as usize].corners(pad))
                 }
-                Shape::Prism { .. } => {
+                Shape::Prism { .. } | Shape::Mesh(_) => {
                     covering_arc(o, &[lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)])
                 }
             };

@@ -4,7 +4,9 @@ mod fan;
 pub mod forest;
 mod grid;
 pub mod material;
+pub mod mesh;
 pub mod overlap;
+pub mod procedural;
 pub mod shape;
 
 pub use fan::Fan;

@@ -1,8 +1,9 @@
 //! Exact overlap of a shape with a box rotated about z: the vehicle's body against the world.
 //!
-//! Every shape of the world is a vertical extrusion or a ball, and the body is a z-yawed box,
-//! so each test is a height-band overlap plus an exact 2D test (separating axes, closest
-//! point, segment clipping) — no sampling, no tolerance beyond touching counting as overlap.
+//! Every analytic shape of the world is a vertical extrusion or a ball, and the body is a
+//! z-yawed box, so each test is a height-band overlap plus an exact 2D test (separating axes,
+//! closest point, segment clipping) — no sampling, no tolerance beyond touching counting as
+//! overlap. A mesh is tested triangle by triangle (separating axes in 3D).
 
 use glam::{DVec2, DVec3};
 
@@ -105,6 +106,7 @@ impl Shape {
                     && rect.distance_squared(center.truncate()) <= radius * radius
             }
             Self::Wall { segments, .. } => segments.iter().any(|s| box_overlap(s, &rect, body)),
+            Self::Mesh(m) => m.overlaps_box(body),
             Self::Prism {
                 polygon,
                 z_min,

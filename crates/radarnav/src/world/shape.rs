@@ -239,6 +239,9 @@ pub enum Shape {
         /// One box per segment, derived from the three fields above.
         segments: Vec<OrientedBox>,
     },
+    /// A triangle mesh (OBJ or glTF, in world coordinates): a volume when closed, a surface
+    /// when open (see [`super::mesh`]).
+    Mesh(std::sync::Arc<super::mesh::TriMesh>),
     /// A vertical extrusion of a simple (possibly concave) polygon.
     Prism {
         /// Polygon vertices in the xy plane, either winding.
@@ -389,6 +392,7 @@ impl Shape {
             Self::Cylinder { .. } => "cylinder",
             Self::Wall { .. } => "wall",
             Self::Prism { .. } => "prism",
+            Self::Mesh(_) => "mesh",
         }
     }
 
@@ -431,6 +435,7 @@ impl Shape {
                 out.extend(segments.iter().filter_map(|b| b.interval(ray)));
                 merge_tail(out, start);
             }
+            Self::Mesh(m) => m.ray_intervals(ray, out),
             Self::Prism {
                 polygon,
                 z_min,
@@ -505,6 +510,7 @@ impl Shape {
                 .map(|b| b.face_at(p))
                 .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
                 .map_or(DVec3::Z, |f| f.1),
+            Self::Mesh(m) => m.normal_at(p),
             Self::Prism {
                 polygon,
                 z_min,
@@ -557,6 +563,7 @@ impl Shape {
                     && p.truncate().distance_squared(center.truncate()) <= radius * radius
             }
             Self::Wall { segments, .. } => segments.iter().any(|b| b.contains(p)),
+            Self::Mesh(m) => m.contains(p),
             Self::Prism {
                 polygon,
                 z_min,
@@ -582,6 +589,7 @@ impl Shape {
                 (DVec3::INFINITY, DVec3::NEG_INFINITY),
                 |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
             ),
+            Self::Mesh(m) => m.aabb(),
             Self::Prism {
                 polygon,
                 z_min,
@@ -606,7 +614,17 @@ impl Shape {
         }
     }
 
-    /// The outline in the xy plane, for drawing top-down: a closed polygon per part.
+    /// Where a mesh is cut by the level plane at height `z` (closed polygons); `None` for
+    /// the analytic shapes, whose footprint is the whole story.
+    pub fn section(&self, z: f64) -> Option<Vec<Vec<DVec2>>> {
+        match self {
+            Self::Mesh(m) => Some(m.section(z)),
+            _ => None,
+        }
+    }
+
+    /// The outline in the xy plane, for drawing top-down: a closed polygon per part (a mesh's
+    /// convex hull).
     pub fn footprint(&self) -> Vec<Vec<DVec2>> {
         let square = |b: &OrientedBox| b.corners(0.0).to_vec();
         let circle = |m: DVec2, r: f64| {
@@ -623,6 +641,7 @@ impl Shape {
             Self::Box(b) => vec![square(b)],
             Self::Wall { segments, .. } => segments.iter().map(square).collect(),
             Self::Prism { polygon, .. } => vec![polygon.clone()],
+            Self::Mesh(m) => vec![m.footprint()],
         }
     }
 }

@@ -1,0 +1,983 @@
+//! Triangle meshes (DESIGN §2 `mesh`): detailed trees, bushes and buildings.
+//!
+//! A closed (watertight, consistently wound) mesh is a volume: a ray's line is inside it
+//! between an entry and an exit crossing, so a foliage crown is entered and left like a
+//! sphere and spends a penetration budget over its chord. An open mesh is a surface: every
+//! crossing is a thin solid sheet ([`SURFACE_THICKNESS`]); a scenario refuses an open mesh of
+//! a penetrable material.
+//!
+//! Crossings use the watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013): each
+//! triangle's vertices are sheared into a frame where the ray runs along one axis, and the
+//! three edge functions decide. The edge function of an edge shared by two triangles is
+//! computed from the same sheared vertices, so its two values are exact negatives; a ray
+//! through the edge itself (value 0) is given to exactly one of the two by a top-left rule.
+//! A ray through a closed mesh therefore crosses it an even number of times, whatever edges
+//! or vertices it meets. The triangles sit in a bounding-volume hierarchy of their own.
+
+use std::collections::HashMap;
+
+use glam::{DVec2, DVec3};
+use thiserror::Error;
+
+use super::shape::{OrientedBox, Ray};
+
+/// Thickness given to an open mesh's surface at each crossing, m.
+pub const SURFACE_THICKNESS: f64 = 1e-6;
+
+/// Most triangles in one mesh (DESIGN §12).
+pub const MAX_TRIANGLES: usize = crate::limits::MESH_TRIANGLES.max as usize;
+
+/// Triangles per leaf of the hierarchy.
+const LEAF_SIZE: usize = 4;
+
+/// Why a mesh cannot be built.
+#[derive(Debug, Error, PartialEq)]
+pub enum MeshError {
+    /// No triangle left (after dropping those with a repeated vertex).
+    #[error("the mesh has no triangle")]
+    Empty,
+    /// A triangle names a vertex that does not exist.
+    #[error("triangle {triangle} names vertex {index}, but there are {vertices} vertices")]
+    BadIndex {
+        /// The triangle.
+        triangle: usize,
+        /// The index it names.
+        index: u32,
+        /// How many vertices there are.
+        vertices: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {0} has a coordinate that is not a finite number")]
+    NotFinite(usize),
+    /// More triangles than [`MAX_TRIANGLES`].
+    #[error("{0} triangles; at most {MAX_TRIANGLES} are allowed")]
+    TooLarge(usize),
+}
+
+/// Triangles that share one material name (`None`: none given), before they become a
+/// [`TriMesh`]: one part of a mesh file or of a generated plant.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshPart {
+    /// The material name the file gives these faces.
+    pub material: Option<String>,
+    /// Vertices.
+    pub vertices: Vec<DVec3>,
+    /// Triangles as indices into `vertices`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// A node of the hierarchy: an inner node's first child follows it, its second child is at
+/// `start`; a leaf holds `order[start..start + count]`.
+#[derive(Clone, Debug, PartialEq)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    start: u32,
+    /// 0 for an inner node.
+    count: u32,
+}
+
+/// A triangle mesh in world coordinates, with its hierarchy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriMesh {
+    vertices: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    /// Watertight and consistently wound (wound outward, then).
+    closed: bool,
+    /// Edges used by only one triangle (0 for a closed mesh).
+    boundary_edges: usize,
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+    /// The corners of triangle `order[k]` at `k`: a leaf's triangles side by side.
+    corners_in_order: Vec<[DVec3; 3]>,
+}
+
+/// One crossing of a line with a mesh: where, and whether the line enters there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Crossing {
+    t: f64,
+    entering: bool,
+}
+
+/// The ray in the sheared frame of the watertight test.
+struct Sheared {
+    origin: DVec3,
+    k: [usize; 3],
+    s: DVec3,
+}
+
+impl Sheared {
+    fn of(ray: &Ray) -> Self {
+        let d = ray.dir;
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        // Keep the winding: a negative main axis swaps the other two.
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Self {
+            origin: ray.origin,
+            k: [kx, ky, kz],
+            s: DVec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+        }
+    }
+
+    /// A vertex relative to the ray, sheared: (x, y) across the ray, z along it (scaled).
+    fn vertex(&self, v: DVec3) -> DVec3 {
+        let p = v - self.origin;
+        let [kx, ky, kz] = self.k;
+        DVec3::new(
+            p[kx] - self.s.x * p[kz],
+            p[ky] - self.s.y * p[kz],
+            self.s.z * p[kz],
+        )
+    }
+
+    /// The crossing of the ray's whole line with triangle `abc`, if any.
+    fn cross(&self, a: DVec3, b: DVec3, c: DVec3) -> Option<Crossing> {
+        let (a, b, c) = (self.vertex(a), self.vertex(b), self.vertex(c));
+        // Edge functions: `edge(p, q)` for the edge p → q; reversed, the exact negative.
+        let edge = |p: DVec3, q: DVec3| q.x * p.y - q.y * p.x;
+        let (u, v, w) = (edge(b, c), edge(c, a), edge(a, b));
+        let det = u + v + w;
+        if det == 0.0 {
+            return None; // seen edge-on (or degenerate): the line grazes it
+        }
+        let sign = det.signum();
+        let inside = |e: f64, p: DVec3, q: DVec3| {
+            let e = e * sign;
+            if e != 0.0 {
+                return e > 0.0;
+            }
+            // On the edge: the top-left rule, on the edge as wound counter-clockwise.
+            let d = (q - p) * sign;
+            d.y > 0.0 || (d.y == 0.0 && d.x < 0.0)
+        };
+        if !(inside(u, b, c) && inside(v, c, a) && inside(w, a, b)) {
+            return None;
+        }
+        let t = (u * a.z + v * b.z + w * c.z) / det;
+        // Outward winding is counter-clockwise seen from outside: a line entering sees the
+        // front, whose sheared winding gives a positive determinant.
+        Some(Crossing {
+            t,
+            entering: det > 0.0,
+        })
+    }
+}
+
+/// Whether the line of `ray` (any t) meets the box `lo..hi`.
+fn line_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for i in 0..3 {
+        let (o, d) = (ray.origin[i], ray.dir[i]);
+        if d == 0.0 {
+            if o < lo[i] || o > hi[i] {
+                return false;
+            }
+        } else {
+            let (a, b) = ((lo[i] - o) * inv[i], (hi[i] - o) * inv[i]);
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+    }
+    t0 <= t1
+}
+
+impl TriMesh {
+    /// A mesh of `triangles` (vertex indices) over `vertices`, in world coordinates. Vertices
+    /// at exactly the same position are merged (file formats split them at seams), triangles
+    /// with a repeated vertex dropped. The mesh is closed when every edge is shared by exactly
+    /// two triangles that can be wound alike; it is then wound outward.
+    pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
+        if triangles.len() > MAX_TRIANGLES {
+            return Err(MeshError::TooLarge(triangles.len()));
+        }
+        if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(MeshError::NotFinite(i));
+        }
+        for (k, t) in triangles.iter().enumerate() {
+            if let Some(&index) = t.iter().find(|&&i| i as usize >= vertices.len()) {
+                return Err(MeshError::BadIndex {
+                    triangle: k,
+                    index,
+                    vertices: vertices.len(),
+                });
+            }
+        }
+        // Weld by exact position (-0 and +0 alike).
+        let mut id: HashMap<[u64; 3], u32> = HashMap::with_capacity(vertices.len());
+        let mut welded = Vec::with_capacity(vertices.len());
+        let remap: Vec<u32> = vertices
+            .iter()
+            .map(|v| {
+                let key = (*v + DVec3::ZERO).to_array().map(f64::to_bits);
+                *id.entry(key).or_insert_with(|| {
+                    welded.push(*v);
+                    (welded.len() - 1) as u32
+                })
+            })
+            .collect();
+        let mut triangles: Vec<[u32; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|i| remap[i as usize]))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+            .collect();
+        if triangles.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        let (closed, boundary_edges) = orient(&mut triangles);
+        let mut mesh = Self {
+            vertices: welded,
+            triangles,
+            closed,
+            boundary_edges,
+            nodes: Vec::new(),
+            order: Vec::new(),
+            corners_in_order: Vec::new(),
+        };
+        if closed && mesh.signed_volume() < 0.0 {
+            for t in &mut mesh.triangles {
+                t.swap(1, 2);
+            }
+        }
+        mesh.build();
+        Ok(mesh)
+    }
+
+    /// Whether the mesh is watertight and consistently wound: a volume.
+    pub fn is_closed(&self) -> bool {
+        self.closed
+    }
+
+    /// Edges used by a single triangle (a closed mesh has none).
+    pub fn boundary_edges(&self) -> usize {
+        self.boundary_edges
+    }
+
+    /// Why the mesh is not closed, in words (empty when it is).
+    pub fn why_open(&self) -> String {
+        match (self.closed, self.boundary_edges) {
+            (true, _) => String::new(),
+            (false, 0) => {
+                "edges shared by more than two triangles, or faces that cannot be wound alike"
+                    .to_owned()
+            }
+            (false, n) => format!("{n} edges belong to one triangle only"),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The vertices, world coordinates.
+    pub fn vertices(&self) -> &[DVec3] {
+        &self.vertices
+    }
+
+    /// The triangles as vertex indices (wound outward when closed).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    fn corners(&self, k: usize) -> [DVec3; 3] {
+        self.triangles[k].map(|i| self.vertices[i as usize])
+    }
+
+    fn signed_volume(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|k| {
+                let [a, b, c] = self.corners(k);
+                a.dot(b.cross(c))
+            })
+            .sum::<f64>()
+            / 6.0
+    }
+
+    /// Axis-aligned bounds `(min, max)`.
+    pub fn aabb(&self) -> (DVec3, DVec3) {
+        let n = &self.nodes[0];
+        (n.lo, n.hi)
+    }
+
+    fn build(&mut self) {
+        let boxes: Vec<(DVec3, DVec3, DVec3)> = (0..self.triangles.len())
+            .map(|k| {
+                let [a, b, c] = self.corners(k);
+                let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+                (lo, hi, (lo + hi) * 0.5)
+            })
+            .collect();
+        self.order = (0..self.triangles.len() as u32).collect();
+        self.nodes.clear();
+        let n = self.order.len();
+        self.split(&boxes, 0, n);
+        self.corners_in_order = (self.order.iter())
+            .map(|&k| self.corners(k as usize))
+            .collect();
+    }
+
+    /// Builds the node for `order[start..end]` and its children (median split on the longest
+    /// axis of the centres); returns its index.
+    fn split(&mut self, boxes: &[(DVec3, DVec3, DVec3)], start: usize, end: usize) -> usize {
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &k in &self.order[start..end] {
+            let (a, b, c) = boxes[k as usize];
+            (lo, hi) = (lo.min(a), hi.max(b));
+            (clo, chi) = (clo.min(c), chi.max(c));
+        }
+        let me = self.nodes.len();
+        self.nodes.push(Node {
+            lo,
+            hi,
+            start: start as u32,
+            count: (end - start) as u32,
+        });
+        if end - start <= LEAF_SIZE {
+            return me;
+        }
+        let ext = chi - clo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let mid = (start + end) / 2;
+        self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
+            boxes[a as usize].2[axis].total_cmp(&boxes[b as usize].2[axis])
+        });
+        self.split(boxes, start, mid);
+        let right = self.split(boxes, mid, end);
+        self.nodes[me].count = 0;
+        self.nodes[me].start = right as u32;
+        me
+    }
+
+    /// Calls `f` with the place in `order` of every triangle whose node boxes pass `keep`.
+    fn visit(&self, keep: impl Fn(DVec3, DVec3) -> bool, mut f: impl FnMut(usize)) {
+        // Median splits keep the depth near log2(triangles / 4) ≤ 21: a fixed stack, no
+        // allocation per query.
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let i = stack[top] as usize;
+            let n = &self.nodes[i];
+            if !keep(n.lo, n.hi) {
+                continue;
+            }
+            if n.count == 0 {
+                stack[top] = n.start;
+                stack[top + 1] = (i + 1) as u32;
+                top += 2;
+            } else {
+                let s = n.start as usize;
+                (s..s + n.count as usize).for_each(&mut f);
+            }
+        }
+    }
+
+    /// Every crossing of the ray's whole line with the mesh, unsorted.
+    fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
+        let sheared = Sheared::of(ray);
+        let inv = ray.dir.recip();
+        self.visit(
+            |lo, hi| line_meets_box(ray, inv, lo, hi),
+            |k| {
+                let [a, b, c] = self.corners_in_order[k];
+                out.extend(sheared.cross(a, b, c));
+            },
+        );
+    }
+
+    /// Appends to `out` the disjoint intervals, in increasing order, where the ray's whole
+    /// line is inside the mesh: between entries and exits for a closed mesh (by winding, so
+    /// nested shells are one volume), a [`SURFACE_THICKNESS`] sheet at each crossing of an
+    /// open one.
+    pub fn ray_intervals(&self, ray: &Ray, out: &mut Vec<(f64, f64)>) {
+        thread_local! {
+            /// The crossings of the current ray, kept from ray to ray.
+            static HITS: std::cell::RefCell<Vec<Crossing>> = const { std::cell::RefCell::new(Vec::new()) };
+        }
+        HITS.with_borrow_mut(|hits| {
+            hits.clear();
+            self.crossings(ray, hits);
+            self.intervals_of(hits, out);
+        });
+    }
+
+    /// The intervals of `hits` (crossings of one line), appended to `out`.
+    fn intervals_of(&self, hits: &mut [Crossing], out: &mut Vec<(f64, f64)>) {
+        if hits.is_empty() {
+            return;
+        }
+        hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(b.entering.cmp(&a.entering)));
+        let start = out.len();
+        if !self.closed {
+            for h in hits.iter() {
+                match out[start..].last_mut() {
+                    Some(last) if h.t <= last.1 => last.1 = h.t + SURFACE_THICKNESS,
+                    _ => out.push((h.t, h.t + SURFACE_THICKNESS)),
+                }
+            }
+            return;
+        }
+        let mut depth = 0i32;
+        let mut entry = 0.0;
+        for h in hits.iter() {
+            if h.entering {
+                if depth == 0 {
+                    entry = h.t;
+                }
+                depth += 1;
+            } else {
+                depth -= 1;
+                if depth == 0 && h.t > entry {
+                    match out[start..].last_mut() {
+                        Some(last) if entry <= last.1 => last.1 = h.t,
+                        _ => out.push((entry, h.t)),
+                    }
+                }
+                // Rounding can never leave the line outside more often than it entered.
+                depth = depth.max(0);
+            }
+        }
+    }
+
+    /// Whether `p` is inside the closed mesh (on the boundary counts either way); an open
+    /// mesh contains nothing.
+    pub fn contains(&self, p: DVec3) -> bool {
+        if !self.closed {
+            return false;
+        }
+        // A direction no axis-aligned or diagonal edge of a modelled object lies along.
+        let ray = Ray::new(p, DVec3::new(0.577_215_664_9, 0.618_033_988_7, 0.529_918_2));
+        let mut hits = Vec::new();
+        self.crossings(&ray, &mut hits);
+        let winding: i32 = hits
+            .iter()
+            .filter(|h| h.t > 0.0)
+            .map(|h| if h.entering { -1 } else { 1 })
+            .sum();
+        winding > 0
+    }
+
+    /// The unit normal of the triangle nearest to `p` (outward for a closed mesh).
+    pub fn normal_at(&self, p: DVec3) -> DVec3 {
+        // Nodes farther than the nearest triangle found so far are skipped.
+        let best = std::cell::Cell::new((f64::INFINITY, 0usize));
+        self.visit(
+            |lo, hi| (p.clamp(lo, hi) - p).length_squared() <= best.get().0,
+            |k| {
+                let [a, b, c] = self.corners_in_order[k];
+                let d = (closest_on_triangle(p, a, b, c) - p).length_squared();
+                if d < best.get().0 {
+                    best.set((d, k));
+                }
+            },
+        );
+        let best = best.get();
+        let [a, b, c] = self.corners_in_order[best.1];
+        (b - a).cross(c - a).try_normalize().unwrap_or(DVec3::Z)
+    }
+
+    /// Whether the mesh meets `body` (a box rotated about z): a triangle touches it, or the
+    /// body lies inside a closed mesh.
+    pub fn overlaps_box(&self, body: &OrientedBox) -> bool {
+        let (blo, bhi) = body.aabb();
+        let hit = std::cell::Cell::new(false);
+        self.visit(
+            |lo, hi| !hit.get() && lo.cmple(bhi).all() && hi.cmpge(blo).all(),
+            |k| {
+                if !hit.get() {
+                    let [a, b, c] = self.corners_in_order[k];
+                    hit.set(triangle_meets_box(a, b, c, body));
+                }
+            },
+        );
+        hit.get() || self.contains(body.center)
+    }
+
+    /// The cut of the mesh by the level plane at height `z`: closed polygons in the xy plane
+    /// (of a closed mesh; an open one gives open chains too), for drawing what a level scan at
+    /// that height meets.
+    pub fn section(&self, z: f64) -> Vec<Vec<DVec2>> {
+        // Each triangle the plane crosses gives a segment between two of its edges; segments
+        // meet at shared edges, so chaining them by edge gives the loops. A vertex exactly at
+        // `z` counts as above, so no segment degenerates to a point.
+        let above = |v: u32| self.vertices[v as usize].z >= z;
+        let cut = |a: u32, b: u32| {
+            let (p, q) = (self.vertices[a as usize], self.vertices[b as usize]);
+            let t = (z - p.z) / (q.z - p.z);
+            (p + (q - p) * t).truncate()
+        };
+        let key = |a: u32, b: u32| (a.min(b), a.max(b));
+        let mut next: HashMap<(u32, u32), ((u32, u32), DVec2)> = HashMap::new();
+        for t in &self.triangles {
+            // In winding order, the segment runs from the edge that rises through the plane
+            // to the edge that falls through it; a neighbour runs their shared edge the other
+            // way, so its segment carries on where this one ends.
+            let (mut rise, mut fall) = (None, None);
+            for e in 0..3 {
+                let (a, b) = (t[e], t[(e + 1) % 3]);
+                match (above(a), above(b)) {
+                    (false, true) => rise = Some(key(a, b)),
+                    (true, false) => fall = Some((key(a, b), cut(a, b))),
+                    _ => {}
+                }
+            }
+            if let (Some(r), Some(f)) = (rise, fall) {
+                next.insert(r, f);
+            }
+        }
+        let mut loops = Vec::new();
+        while let Some(&start) = next.keys().next() {
+            let mut poly = Vec::new();
+            let mut at = start;
+            while let Some((to, p)) = next.remove(&at) {
+                poly.push(p);
+                at = to;
+            }
+            if poly.len() >= 3 {
+                loops.push(poly);
+            }
+        }
+        loops
+    }
+
+    /// The outline in the xy plane: the convex hull of the vertices, for drawing top-down.
+    pub fn footprint(&self) -> Vec<DVec2> {
+        let mut pts: Vec<DVec2> = self.vertices.iter().map(|v| v.truncate()).collect();
+        pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        pts.dedup();
+        if pts.len() < 3 {
+            return pts;
+        }
+        // Andrew's monotone chain.
+        let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+        let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
+        for pass in 0..2 {
+            let floor = hull.len();
+            let walk = |p: DVec2, hull: &mut Vec<DVec2>| {
+                while hull.len() >= floor + 2
+                    && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+                {
+                    hull.pop();
+                }
+                hull.push(p);
+            };
+            if pass == 0 {
+                pts.iter().for_each(|&p| walk(p, &mut hull));
+            } else {
+                pts.iter().rev().for_each(|&p| walk(p, &mut hull));
+            }
+            hull.pop();
+        }
+        hull
+    }
+}
+
+/// Makes the winding of `triangles` consistent across shared edges where it can; returns
+/// whether the mesh is closed (every edge shared by exactly two triangles, all wound alike)
+/// and how many edges only one triangle uses.
+fn orient(triangles: &mut [[u32; 3]]) -> (bool, usize) {
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut users: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(triangles.len() * 2);
+    for (k, t) in triangles.iter().enumerate() {
+        for e in 0..3 {
+            users
+                .entry(key(t[e], t[(e + 1) % 3]))
+                .or_default()
+                .push(k as u32);
+        }
+    }
+    let boundary = users.values().filter(|u| u.len() == 1).count();
+    let manifold = users.values().all(|u| u.len() == 2);
+    // Flood over shared edges, flipping a neighbour that runs the edge the same way.
+    let mut seen = vec![false; triangles.len()];
+    let mut consistent = true;
+    for seed in 0..triangles.len() {
+        if seen[seed] {
+            continue;
+        }
+        seen[seed] = true;
+        let mut stack = vec![seed];
+        while let Some(k) = stack.pop() {
+            let t = triangles[k];
+            for e in 0..3 {
+                let (a, b) = (t[e], t[(e + 1) % 3]);
+                for &n in &users[&key(a, b)] {
+                    let n = n as usize;
+                    if n == k {
+                        continue;
+                    }
+                    let same_way = (0..3).any(|f| {
+                        let u = triangles[n];
+                        u[f] == a && u[(f + 1) % 3] == b
+                    });
+                    if seen[n] {
+                        consistent &= !same_way;
+                    } else {
+                        seen[n] = true;
+                        if same_way {
+                            triangles[n].swap(1, 2);
+                        }
+                        stack.push(n);
+                    }
+                }
+            }
+        }
+    }
+    (manifold && consistent, boundary)
+}
+
+/// The point of triangle `abc` nearest to `p` (Ericson, Real-Time Collision Detection 5.1.5).
+fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Whether triangle `abc` meets the box (separating axes: the box's three axes, the
+/// triangle's normal and the nine cross products of their edges; touching counts).
+fn triangle_meets_box(a: DVec3, b: DVec3, c: DVec3, body: &OrientedBox) -> bool {
+    let (s, co) = body.yaw.sin_cos();
+    let axes = [DVec3::new(co, s, 0.0), DVec3::new(-s, co, 0.0), DVec3::Z];
+    // The triangle in the box's frame, centred.
+    let local = |p: DVec3| {
+        let d = p - body.center;
+        DVec3::new(d.dot(axes[0]), d.dot(axes[1]), d.dot(axes[2]))
+    };
+    let v = [local(a), local(b), local(c)];
+    let h = body.half;
+    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+    let separated = |axis: DVec3| {
+        if axis.length_squared() < 1e-24 {
+            return false;
+        }
+        let p = v.map(|q| q.dot(axis));
+        let r = h.x * axis.x.abs() + h.y * axis.y.abs() + h.z * axis.z.abs();
+        p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r
+    };
+    let box_axes = [DVec3::X, DVec3::Y, DVec3::Z];
+    if box_axes.iter().any(|&u| separated(u)) {
+        return false;
+    }
+    if separated(edges[0].cross(edges[1])) {
+        return false;
+    }
+    !box_axes
+        .iter()
+        .any(|&u| edges.iter().any(|&e| separated(u.cross(e))))
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// An icosphere-like UV sphere: `stacks` × `slices` quads, poles as fans; closed.
+    pub(crate) fn uv_sphere(center: DVec3, r: f64, stacks: u32, slices: u32) -> TriMesh {
+        let mut v = vec![center + DVec3::Z * r, center - DVec3::Z * r];
+        for i in 1..stacks {
+            let phi = std::f64::consts::PI * i as f64 / stacks as f64;
+            for j in 0..slices {
+                let th = std::f64::consts::TAU * j as f64 / slices as f64;
+                v.push(
+                    center + r * DVec3::new(phi.sin() * th.cos(), phi.sin() * th.sin(), phi.cos()),
+                );
+            }
+        }
+        let ring = |i: u32, j: u32| 2 + (i - 1) * slices + j % slices;
+        let mut t = Vec::new();
+        for j in 0..slices {
+            t.push([0, ring(1, j), ring(1, j + 1)]);
+            t.push([1, ring(stacks - 1, j + 1), ring(stacks - 1, j)]);
+            for i in 1..stacks - 1 {
+                t.push([ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)]);
+                t.push([ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)]);
+            }
+        }
+        TriMesh::new(v, t).expect("a sphere mesh")
+    }
+
+    /// A unit cube of corners `lo..hi` as 12 triangles, wound as `flip` says.
+    pub(crate) fn cube(lo: DVec3, hi: DVec3, flip: bool) -> TriMesh {
+        let v: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let mut t = Vec::new();
+        for q in quads {
+            let (a, b) = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
+            t.push(if flip { [a[0], a[2], a[1]] } else { a });
+            t.push(if flip { [b[0], b[2], b[1]] } else { b });
+        }
+        TriMesh::new(v, t).expect("a cube")
+    }
+
+    fn intervals(m: &TriMesh, ray: &Ray) -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        m.ray_intervals(ray, &mut out);
+        out
+    }
+
+    #[test]
+    fn a_cube_is_closed_whichever_way_it_is_wound_and_gives_its_chord() {
+        for flip in [false, true] {
+            let c = cube(DVec3::ZERO, DVec3::ONE, flip);
+            assert!(c.is_closed() && c.boundary_edges() == 0);
+            let ray = Ray::new(DVec3::new(-1.0, 0.3, 0.4), DVec3::X);
+            assert_eq!(intervals(&c, &ray), vec![(1.0, 2.0)]);
+            // Through an edge and along a face diagonal: still one entry and one exit.
+            let diag = Ray::new(DVec3::new(-1.0, 0.0, -1.0), DVec3::new(1.0, 0.0, 1.0));
+            let iv = intervals(&c, &diag);
+            assert!(iv.len() <= 1, "{iv:?}");
+            let corner = Ray::new(DVec3::splat(-1.0), DVec3::ONE);
+            let iv = intervals(&c, &corner);
+            assert_eq!(iv.len(), 1, "{iv:?}");
+            let s3 = 3f64.sqrt();
+            assert!((iv[0].0 - s3).abs() < 1e-12 && (iv[0].1 - 2.0 * s3).abs() < 1e-12);
+            assert!(c.contains(DVec3::splat(0.5)) && !c.contains(DVec3::splat(1.5)));
+            let n = c.normal_at(DVec3::new(1.0, 0.5, 0.5));
+            assert!((n - DVec3::X).length() < 1e-12, "outward {n}");
+        }
+    }
+
+    #[test]
+    fn a_section_of_a_sphere_is_one_loop_on_its_circle() {
+        let (c, r) = (DVec3::new(2.0, -1.0, 1.0), 1.0);
+        let m = uv_sphere(c, r, 32, 64);
+        let loops = m.section(1.4);
+        assert_eq!(loops.len(), 1);
+        let want = (r * r - 0.4f64 * 0.4).sqrt();
+        for p in &loops[0] {
+            let d = p.distance(c.truncate());
+            assert!(d <= want + 1e-9 && d > want * 0.99, "{d} vs {want}");
+        }
+        assert!(loops[0].len() >= 64);
+        assert!(m.section(2.5).is_empty());
+    }
+
+    #[test]
+    fn an_open_mesh_is_a_thin_sheet_and_a_bad_one_is_refused() {
+        // One square, two triangles: open.
+        let v = vec![
+            DVec3::new(2.0, -1.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(2.0, 1.0, 2.0),
+            DVec3::new(2.0, -1.0, 2.0),
+        ];
+        let m = TriMesh::new(v.clone(), vec![[0, 1, 2], [0, 2, 3]]).expect("mesh");
+        assert!(!m.is_closed());
+        assert_eq!(m.boundary_edges(), 4);
+        let ray = Ray::new(DVec3::new(0.0, 0.0, 1.0), DVec3::X);
+        assert_eq!(intervals(&m, &ray), vec![(2.0, 2.0 + SURFACE_THICKNESS)]);
+        assert!(!m.contains(DVec3::new(2.0, 0.0, 1.0)));
+        assert_eq!(
+            TriMesh::new(v.clone(), vec![[0, 1, 9]]),
+            Err(MeshError::BadIndex {
+                triangle: 0,
+                index: 9,
+                vertices: 4
+            })
+        );
+        assert_eq!(
+            TriMesh::new(v.clone(), vec![[0, 0, 1]]),
+            Err(MeshError::Empty)
+        );
+        let mut bad = v;
+        bad[2].y = f64::NAN;
+        assert_eq!(
+            TriMesh::new(bad, vec![[0, 1, 2]]),
+            Err(MeshError::NotFinite(2))
+        );
+    }
+
+    #[test]
+    fn a_fine_sphere_mesh_gives_the_analytic_chord_within_its_tessellation() {
+        let (c, r) = (DVec3::new(1.0, 2.0, 1.5), 1.0);
+        let m = uv_sphere(c, r, 64, 128);
+        assert!(m.is_closed());
+        // The mesh lies between the sphere and its inscribed polyhedron: chord ends within
+        // r (1 − cos(π/64)) ≈ 1.2 mm of the analytic ones, for rays well inside the rim.
+        let tol = r * (1.0 - (std::f64::consts::PI / 64.0).cos()) * 2.0;
+        for k in 0..200 {
+            let a = k as f64 * 0.731;
+            let off = DVec3::new(0.0, 0.8 * (a * 1.3).sin(), 0.8 * (a * 0.7).cos()) * 0.9;
+            let dir = DVec3::new(1.0, 0.1 * a.sin(), 0.05 * a.cos()).normalize();
+            let ray = Ray::new(c + off - dir * 5.0, dir);
+            let exact = super::super::shape::sphere_interval(c, r, &ray);
+            let ours = intervals(&m, &ray);
+            match exact {
+                Some((t0, t1)) if t1 - t0 > 0.2 => {
+                    assert_eq!(ours.len(), 1, "ray {k}: {ours:?}");
+                    let chord = (t0, t1);
+                    // Along the ray the radial error grows by 1/cos of the incidence.
+                    let scale = 2.0 * r / (t1 - t0);
+                    assert!((ours[0].0 - chord.0).abs() < tol * scale * 2.0, "{k}");
+                    assert!((ours[0].1 - chord.1).abs() < tol * scale * 2.0, "{k}");
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// The brute-force reference: the winding number of the half-line from the point out
+    /// along a second direction (exits count +1, entries −1), over every triangle with a
+    /// plain (not watertight) test; overlapping closed parts make one volume.
+    fn brute_inside(m: &TriMesh, p: DVec3) -> bool {
+        let dir = DVec3::new(0.31, -0.87, 0.38).normalize();
+        let mut n = 0;
+        for k in 0..m.triangle_count() {
+            let [a, b, c] = m.corners(k);
+            // Möller–Trumbore.
+            let (e1, e2) = (b - a, c - a);
+            let pv = dir.cross(e2);
+            let det = e1.dot(pv);
+            if det.abs() < 1e-14 {
+                continue;
+            }
+            let tv = p - a;
+            let u = tv.dot(pv) / det;
+            let qv = tv.cross(e1);
+            let v = dir.dot(qv) / det;
+            let t = e2.dot(qv) / det;
+            if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 {
+                n += if dir.dot(e1.cross(e2)) > 0.0 { 1 } else { -1 };
+            }
+        }
+        n > 0
+    }
+
+    fn two_cubes() -> TriMesh {
+        // Two cubes and a coarse sphere overlapping one of them, as one mesh.
+        let parts = [
+            cube(DVec3::ZERO, DVec3::ONE, false),
+            cube(DVec3::new(2.0, 0.0, 0.0), DVec3::new(3.0, 2.0, 1.0), true),
+            uv_sphere(DVec3::new(0.5, 1.2, 0.5), 0.6, 6, 9),
+        ];
+        let (mut v, mut t) = (Vec::new(), Vec::new());
+        for m in &parts {
+            let base = v.len() as u32;
+            v.extend_from_slice(m.vertices());
+            t.extend(m.triangles().iter().map(|x| x.map(|i| i + base)));
+        }
+        TriMesh::new(v, t).expect("mesh")
+    }
+
+    proptest! {
+        /// Inside and outside along random rays (their origins inside objects too): a point
+        /// well inside an interval is inside by a brute-force winding number, a point well outside
+        /// every interval is outside; the intervals are sorted and disjoint.
+        #[test]
+        fn intervals_agree_with_brute_force_parity(
+            o in prop::array::uniform3(-1.0..4.0f64),
+            d in prop::array::uniform3(-1.0..1.0f64),
+            snap in 0usize..3,
+        ) {
+            let m = two_cubes();
+            prop_assume!(DVec3::from(d).length() > 0.1);
+            let mut origin = DVec3::from(o);
+            // Some rays through vertices and along edges' planes.
+            if snap == 1 {
+                origin = origin.round();
+            }
+            let ray = Ray::new(origin, DVec3::from(d));
+            let iv = intervals(&m, &ray);
+            for w in iv.windows(2) {
+                prop_assert!(w[0].1 < w[1].0, "{:?}", iv);
+            }
+            for k in 0..120 {
+                let t = -6.0 + k as f64 * 0.1 + 0.0137;
+                let near = iv.iter().any(|&(a, b)| (t - a).abs() < 1e-6 || (t - b).abs() < 1e-6);
+                let p = ray.at(t);
+                // On (or within rounding of) the surface, inside and outside are both right.
+                let on_surface = (0..m.triangle_count()).any(|k| {
+                    let [a, b, c] = m.corners(k);
+                    closest_on_triangle(p, a, b, c).distance(p) < 1e-6
+                });
+                if near || on_surface {
+                    continue;
+                }
+                let inside = iv.iter().any(|&(a, b)| t > a && t < b);
+                prop_assert_eq!(inside, brute_inside(&m, p), "t {} p {}", t, p);
+                prop_assert_eq!(inside, m.contains(p), "contains at t {}", t);
+            }
+        }
+
+        /// A triangle meets a box exactly when sampled points say so, away from touching.
+        #[test]
+        fn triangle_box_test_agrees_with_parry(
+            a in prop::array::uniform3(-2.0..2.0f64),
+            b in prop::array::uniform3(-2.0..2.0f64),
+            c in prop::array::uniform3(-2.0..2.0f64),
+            yaw in -3.2..3.2f64,
+        ) {
+            use parry3d_f64::math::Pose as PPose;
+            use parry3d_f64::query::intersection_test;
+            use parry3d_f64::shape::{Cuboid, Triangle};
+            let body = OrientedBox::new(DVec3::new(0.2, -0.1, 0.3), DVec3::new(1.0, 0.6, 0.5), yaw);
+            let (a, b, c) = (DVec3::from(a), DVec3::from(b), DVec3::from(c));
+            prop_assume!((b - a).cross(c - a).length() > 1e-3);
+            let ours = triangle_meets_box(a, b, c, &body);
+            let pose = PPose::new(body.center, DVec3::new(0.0, 0.0, yaw));
+            let identity = PPose::new(DVec3::ZERO, DVec3::ZERO);
+            let theirs = intersection_test(&pose, &Cuboid::new(body.half), &identity, &Triangle::new(a, b, c))
+                .expect("supported")
+                .intersecting;
+            prop_assert_eq!(ours, theirs);
+        }
+    }
+}
