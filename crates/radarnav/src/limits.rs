@@ -112,7 +112,7 @@ limits! {
     /// Triangles of one mesh part.
     MESH_TRIANGLES = "mesh triangles (count)" in "object": 1.0, 5e6, "", "about 200 bytes a triangle while it is built";
     /// Size of a mesh file (and of each `.bin` or `.mtl` it names).
-    MESH_FILE = "mesh file (size)" in "object": 0.0, 256.0, "MiB", "read in whole";
+    MESH_FILE = "mesh file (size)" in "object": 0.0, 256.0, "MiB", "read in whole; a glTF's buffers together too";
     /// Objects in a scenario.
     OBJECTS = "[[object]] (count)" in "scenario": 0.0, 1e6, "", "the ray-query benchmarks use 100 000";
     /// Any angle given in degrees as a heading.

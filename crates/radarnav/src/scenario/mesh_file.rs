@@ -207,6 +207,15 @@ fn gltf_parts(path: &Path) -> Result<Vec<MeshPart>, String> {
         .buffers()
         .map(|b| buffer_data(path, &b, &mut blob))
         .collect::<Result<Vec<_>, _>>()?;
+    // Each buffer file is bounded; so is their sum.
+    let total: u64 = buffers.iter().map(|b| b.len() as u64).sum();
+    if total > MAX_MESH_FILE_BYTES {
+        return Err(format!(
+            "{}: its buffers hold more than the limit of {} MiB",
+            path.display(),
+            MAX_MESH_FILE_BYTES >> 20
+        ));
+    }
     let scene = document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -359,7 +368,7 @@ f 4 1 5 8
             bin.len()
         );
         let file = tmp("square.gltf");
-        std::fs::write(&file, json).expect("write");
+        std::fs::write(&file, &json).expect("write");
         let place = Placement {
             up: Up::Y,
             scale: 1.0,
@@ -379,6 +388,31 @@ f 4 1 5 8
             "{:?}",
             parts[0].vertices
         );
+        // The same as a binary GLB: the buffer in its BIN chunk.
+        let json = json.replace(
+            &format!(r#""uri":"data:application/octet-stream;base64,{b64}""#),
+            r#""byteOffset":0"#,
+        );
+        let json = json.replace(r#","byteOffset":0}],"bufferViews""#, r#"}],"bufferViews""#);
+        let pad = |mut v: Vec<u8>, with: u8| {
+            while v.len() % 4 != 0 {
+                v.push(with);
+            }
+            v
+        };
+        let (j, b) = (pad(json.into_bytes(), b' '), pad(bin.clone(), 0));
+        let mut glb = b"glTF".to_vec();
+        glb.extend(2u32.to_le_bytes());
+        glb.extend(((12 + 8 + j.len() + 8 + b.len()) as u32).to_le_bytes());
+        glb.extend((j.len() as u32).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(&j);
+        glb.extend((b.len() as u32).to_le_bytes());
+        glb.extend(b"BIN\0");
+        glb.extend(&b);
+        let file = tmp("square.glb");
+        std::fs::write(&file, glb).expect("write");
+        assert_eq!(load(&file, &place).expect("a GLB loads"), parts);
     }
 
     #[test]
