@@ -99,6 +99,21 @@ enum Command {
     Presets,
     /// Print the valid range of every numeric input (docs/limits.md) as a Markdown table.
     Limits,
+    /// Grow a seeded tree or bush (as `mesh = { generate = ... }` does) and write it as OBJ
+    /// with its MTL beside it, for viewers and editors.
+    Grow {
+        /// `tree` or `bush`.
+        plant: String,
+        /// Seed: the same seed grows the same plant.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Height, metres (default: tree 5, bush 1.2).
+        #[arg(long, value_parser = number(&limits::SIZE))]
+        height: Option<f64>,
+        /// The OBJ file to write (the MTL gets the same name with `.mtl`).
+        #[arg(long, default_value = "plant.obj")]
+        out: PathBuf,
+    },
     /// Draw a scenario's world, with its robots at their start poses.
     Render {
         /// A built-in name or a path to a .toml file.
@@ -394,6 +409,24 @@ fn run(cli: Cli) -> Result<()> {
             maps: !no_maps,
             add_sensors: &add_sensor,
         }),
+        Command::Grow {
+            plant,
+            seed,
+            height,
+            out,
+        } => {
+            use radarnav::world::procedural::{Plant, grow, write_obj};
+            let kind = Plant::parse(&plant)
+                .with_context(|| format!("unknown plant `{plant}`; known: tree, bush"))?;
+            let parts = grow(kind, height.unwrap_or(kind.default_height()), seed);
+            write_obj(&out, &parts).with_context(|| format!("writing {}", out.display()))?;
+            let triangles: usize = parts.iter().map(|p| p.triangles.len()).sum();
+            say!(
+                "{plant} (seed {seed}): {triangles} triangles; wrote {}",
+                out.display()
+            );
+            Ok(())
+        }
         Command::Limits => {
             say!("{}", limits::markdown_table().trim_end());
             Ok(())

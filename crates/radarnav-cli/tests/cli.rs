@@ -621,3 +621,61 @@ fn serve_greets_a_usarsim_client_and_stops_on_sigterm() {
     assert!(status.success(), "{status:?}: {rest}");
     assert!(rest.contains("stopped"), "{rest}");
 }
+
+/// A grown tree written as OBJ is a mesh file a scenario reads: the laser stops on its trunk,
+/// and the run is the same as with the same tree generated in place.
+#[test]
+fn a_grown_tree_is_a_mesh_file_a_scenario_reads_like_the_generated_one() {
+    let dir = tmp("grow");
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("tree.obj");
+    radarnav_ok(&[
+        "grow",
+        "tree",
+        "--seed",
+        "4",
+        "--height",
+        "5",
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(dir.join("tree.mtl").is_file());
+    let scene = |mesh: &str| {
+        format!(
+            "[[object]]\nname = \"t\"\nmaterial = \"foliage_dense\"\nmesh = {{ {mesh}, center = [3.0, 0.0] }}\n\
+             [[robot]]\nname = \"r\"\nstart = {{ x = 0.0, y = 0.0 }}\n\
+             [[robot.sensor]]\nname = \"laser\"\npreset = \"hokuyo_utm30lx\"\nmount = {{ z = 0.4 }}\n"
+        )
+    };
+    let from_file = dir.join("file.toml");
+    std::fs::write(
+        &from_file,
+        scene("file = \"tree.obj\", materials = { bark = \"wood\" }"),
+    )
+    .unwrap();
+    let generated = dir.join("gen.toml");
+    std::fs::write(
+        &generated,
+        scene("generate = \"tree\", seed = 4, height = 5.0"),
+    )
+    .unwrap();
+    let mut scans = Vec::new();
+    for (toml, out) in [(&from_file, "scan-file"), (&generated, "scan-gen")] {
+        let out = dir.join(out);
+        radarnav_ok(&[
+            "scan",
+            toml.to_str().unwrap(),
+            "--sensor",
+            "laser",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        scans.push(read(&out, "scan.csv"));
+    }
+    assert_eq!(scans[0], scans[1]);
+    let csv = String::from_utf8_lossy(&scans[0]);
+    assert!(csv.contains(",wood,"), "the laser meets the trunk");
+    let bad = radarnav(&["grow", "shrub"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("known: tree, bush"));
+}

@@ -256,6 +256,17 @@ pub fn to_obj(parts: &[MeshPart], mtl: &str) -> String {
     s
 }
 
+/// Writes `parts` to `path` as OBJ with its MTL beside it (same stem, `.mtl`), each file
+/// whole or not at all; `mesh = { file = … }` reads them back as the same parts.
+pub fn write_obj(path: &std::path::Path, parts: &[MeshPart]) -> std::io::Result<()> {
+    let mtl = path.with_extension("mtl");
+    let mtl_name = mtl
+        .file_name()
+        .map_or_else(|| "plant.mtl".into(), |n| n.to_string_lossy().into_owned());
+    crate::output::write_whole(&mtl, to_mtl(parts).as_bytes())?;
+    crate::output::write_whole(path, to_obj(parts, &mtl_name).as_bytes())
+}
+
 /// The MTL text naming `parts`' materials (colours for viewers: brown bark, green leaves).
 pub fn to_mtl(parts: &[MeshPart]) -> String {
     parts
