@@ -395,7 +395,7 @@ f 4 1 5 8
         );
         let json = json.replace(r#","byteOffset":0}],"bufferViews""#, r#"}],"bufferViews""#);
         let pad = |mut v: Vec<u8>, with: u8| {
-            while v.len() % 4 != 0 {
+            while !v.len().is_multiple_of(4) {
                 v.push(with);
             }
             v
