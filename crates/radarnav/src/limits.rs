@@ -109,8 +109,8 @@ limits! {
     POINTS = "points, polygon (count)" in "object": 2.0, 1e4, "", "polygon needs 3";
     /// Scale of a mesh file's units to metres.
     MESH_SCALE = "mesh scale" in "object": 1e-4, 1e4, "", "0.1 mm to 10 km per file unit";
-    /// Triangles of one mesh part.
-    MESH_TRIANGLES = "mesh triangles (count)" in "object": 1.0, 5e6, "", "about 200 bytes a triangle while it is built";
+    /// Triangles of one mesh part, and of a whole glTF scene.
+    MESH_TRIANGLES = "mesh triangles (count)" in "object": 1.0, 5e6, "", "per part and per glTF scene; about 200 bytes a triangle while it is built";
     /// Size of a mesh file (and of each `.bin` or `.mtl` it names).
     MESH_FILE = "mesh file (size)" in "object": 0.0, 256.0, "MiB", "read in whole; a glTF's buffers together too";
     /// Objects in a scenario.

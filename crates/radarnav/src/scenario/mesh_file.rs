@@ -8,6 +8,12 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
+
+use crate::world::mesh::MAX_TRIANGLES;
+use gltf::mesh::Mode;
+
+/// Deepest glTF node hierarchy read.
+const MAX_NODE_DEPTH: usize = 256;
 use glam::{DMat4, DVec3};
 
 /// Largest mesh file (and each `.bin` or `.mtl` beside it) read, bytes (DESIGN §12).
@@ -80,7 +86,10 @@ pub fn load(path: &Path, placement: &Placement) -> Result<Vec<MeshPart>, String>
     };
     let parts = placement.place(parts);
     if parts.is_empty() {
-        return Err(format!("{}: no triangles in the file", path.display()));
+        return Err(format!(
+            "{}: no triangles in the file (points and lines are not surfaces)",
+            path.display()
+        ));
     }
     Ok(parts)
 }
@@ -201,8 +210,21 @@ fn buffer_data(
 
 fn gltf_parts(path: &Path) -> Result<Vec<MeshPart>, String> {
     let bytes = read_bytes(path)?;
-    let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(&bytes)
-        .map_err(|e| format!("{}: not a readable glTF file: {e}", path.display()))?;
+    let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| {
+        // glTF 1.0 (2015) has another layout; say so rather than where its JSON differs.
+        let v1 = serde_json::from_slice::<serde_json::Value>(&bytes)
+            .ok()
+            .and_then(|j| j["asset"]["version"].as_str().map(|v| v.starts_with('1')))
+            .unwrap_or(false);
+        if v1 {
+            format!(
+                "{}: glTF 1.0 is not read; convert it to glTF 2.0 (e.g. Blender's importer and exporter)",
+                path.display()
+            )
+        } else {
+            format!("{}: not a readable glTF file: {e}", path.display())
+        }
+    })?;
     let buffers = document
         .buffers()
         .map(|b| buffer_data(path, &b, &mut blob))
@@ -221,24 +243,50 @@ fn gltf_parts(path: &Path) -> Result<Vec<MeshPart>, String> {
         .or_else(|| document.scenes().next())
         .ok_or_else(|| format!("{}: no scene", path.display()))?;
     let mut parts = Vec::new();
-    let mut stack: Vec<(gltf::Node<'_>, DMat4)> =
-        scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+    let (mut vertices_total, mut triangles_total) = (0usize, 0usize);
+    let mut stack: Vec<(gltf::Node<'_>, DMat4, usize)> =
+        scene.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
     let mut visited = 0usize;
-    while let Some((node, parent)) = stack.pop() {
-        // A document is validated acyclic; this bounds a hostile one all the same.
+    while let Some((node, parent, depth)) = stack.pop() {
+        // A node that is its own ancestor would be visited for ever: refuse deep trees.
         visited += 1;
-        if visited > 1_000_000 {
-            return Err(format!("{}: more than a million nodes", path.display()));
+        if depth > MAX_NODE_DEPTH || visited > 1_000_000 {
+            return Err(format!(
+                "{}: its nodes nest deeper than {MAX_NODE_DEPTH} levels or number over a million (a node that is its own child?)",
+                path.display()
+            ));
         }
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
-        stack.extend(node.children().map(|c| (c, world)));
+        stack.extend(node.children().map(|c| (c, world, depth + 1)));
         let Some(mesh) = node.mesh() else {
             continue;
         };
         for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                continue; // points, lines and strips are not read as surfaces
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                continue; // points and lines are not surfaces
+            }
+            // Nodes may instance one mesh many times: bound what the file expands to before
+            // reading it, not only its size on disk.
+            let vertex_count = prim
+                .get(&gltf::Semantic::Positions)
+                .map_or(0, |a| a.count());
+            let index_count = prim.indices().map_or(vertex_count, |a| a.count());
+            let triangles = match mode {
+                Mode::Triangles => index_count / 3,
+                _ => index_count.saturating_sub(2),
+            };
+            (vertices_total, triangles_total) =
+                (vertices_total + vertex_count, triangles_total + triangles);
+            if triangles_total > MAX_TRIANGLES || vertices_total > 3 * MAX_TRIANGLES {
+                return Err(format!(
+                    "{}: its scene holds more than the limit of {MAX_TRIANGLES} triangles",
+                    path.display()
+                ));
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             let Some(positions) = reader.read_positions() else {
@@ -253,19 +301,27 @@ fn gltf_parts(path: &Path) -> Result<Vec<MeshPart>, String> {
             };
             // A mirroring transform turns the winding inside out; keep it outward.
             let mirrored = world.determinant() < 0.0;
+            let wound = |t: [u32; 3]| if mirrored { [t[0], t[2], t[1]] } else { t };
+            let triangles: Vec<[u32; 3]> = match mode {
+                Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                    .map(|k| {
+                        let (a, b, c) = (indices[k], indices[k + 1], indices[k + 2]);
+                        // Every other triangle of a strip runs the other way round.
+                        wound(if k % 2 == 0 { [a, b, c] } else { [b, a, c] })
+                    })
+                    .collect(),
+                Mode::TriangleFan => (1..indices.len().saturating_sub(1))
+                    .map(|k| wound([indices[0], indices[k], indices[k + 1]]))
+                    .collect(),
+                _ => indices
+                    .chunks_exact(3)
+                    .map(|c| wound([c[0], c[1], c[2]]))
+                    .collect(),
+            };
             parts.push(MeshPart {
                 material: prim.material().name().map(str::to_owned),
                 vertices,
-                triangles: indices
-                    .chunks_exact(3)
-                    .map(|c| {
-                        if mirrored {
-                            [c[0], c[2], c[1]]
-                        } else {
-                            [c[0], c[1], c[2]]
-                        }
-                    })
-                    .collect(),
+                triangles,
             });
         }
     }
@@ -413,6 +469,89 @@ f 4 1 5 8
         let file = tmp("square.glb");
         std::fs::write(&file, glb).expect("write");
         assert_eq!(load(&file, &place).expect("a GLB loads"), parts);
+    }
+
+    /// A unit square in the file's x-y plane as triangles (mode 4), a strip (5) or a fan (6):
+    /// the same two triangles, wound alike (both normals along +z, y up → -y after placing).
+    #[test]
+    fn gltf_strips_and_fans_give_the_triangles_of_a_list() {
+        let square = |mode: u32, idx: &[u16]| {
+            let pos: [f32; 12] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+            let mut bin: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
+            bin.extend(idx.iter().flat_map(|i| i.to_le_bytes()));
+            let b64 = base64::engine::general_purpose::STANDARD.encode(&bin);
+            let json = format!(
+                r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+                "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"mode":{mode}}}]}}],
+                "buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{b64}"}}],
+                "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":{}}}],
+                "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                             {{"bufferView":1,"componentType":5123,"count":{},"type":"SCALAR"}}]}}"#,
+                bin.len(),
+                2 * idx.len(),
+                idx.len()
+            );
+            let file = tmp(&format!("mode{mode}.gltf"));
+            std::fs::write(&file, json).expect("write");
+            let place = Placement {
+                up: Up::Z,
+                scale: 1.0,
+                yaw: 0.0,
+                center: DVec3::ZERO,
+            };
+            let parts = load(&file, &place).expect("loads");
+            let p = &parts[0];
+            p.triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| p.vertices[i as usize]);
+                    (b - a).cross(c - a)
+                })
+                .collect::<Vec<DVec3>>()
+        };
+        let list = square(4, &[0, 1, 2, 0, 2, 3]);
+        for normals in [
+            list.clone(),
+            square(5, &[0, 1, 3, 2]),
+            square(6, &[0, 1, 2, 3]),
+        ] {
+            assert_eq!(normals.len(), 2);
+            for n in normals {
+                assert_eq!(n, DVec3::new(0.0, 0.0, 1.0), "wound like the list");
+            }
+        }
+    }
+
+    /// Nodes that instance one small mesh thousands of times are refused before they are
+    /// read: 5 001 nodes × 1 000 triangles from a 12 kB buffer.
+    #[test]
+    fn a_gltf_that_instances_past_the_triangle_limit_is_refused() {
+        let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+            .iter()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        bin.extend((0..3000u32).flat_map(|i| (i % 3).to_le_bytes()));
+        let b64 = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let nodes: Vec<String> = (0..5001).map(|_| r#"{"mesh":0}"#.to_owned()).collect();
+        let roots: Vec<String> = (0..5001).map(|i| i.to_string()).collect();
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[{}]}}],"nodes":[{}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+            "buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{b64}"}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":12000}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                         {{"bufferView":1,"componentType":5125,"count":3000,"type":"SCALAR"}}]}}"#,
+            roots.join(","),
+            nodes.join(","),
+            bin.len()
+        );
+        let file = tmp("bomb.gltf");
+        std::fs::write(&file, json).expect("write");
+        let e = load(&file, &placed()).expect_err("too many triangles");
+        assert!(
+            e.contains("more than the limit of 5000000 triangles"),
+            "{e}"
+        );
     }
 
     #[test]

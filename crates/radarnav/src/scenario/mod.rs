@@ -556,7 +556,6 @@ fn build_mesh(
         yaw: ms.yaw_deg.0.to_radians(),
         center: ms.center.as_ref().map_or(DVec3::ZERO, |c| center(c, 0.0)),
     };
-    let path = ctx.dir.join(&source);
     let parts = match &ms.generate {
         Some(g) => {
             let plant = Plant::parse(g.get_ref()).ok_or_else(|| {
@@ -569,7 +568,7 @@ fn build_mesh(
             let height = ms.height.map_or(plant.default_height(), |h| h.0);
             placement.place(grow(plant, height, ms.seed.unwrap_or(1)))
         }
-        None => mesh_file::load(&path, &placement)
+        None => mesh_file::load(&ctx.dir.join(&source), &placement)
             .map_err(|e| ctx.err(source_span.clone(), Some("file"), e))?,
     };
     for name in ms.materials.keys() {
