@@ -184,6 +184,8 @@ pub struct Grid {
     passable: Vec<f32>,
     /// Number of the last update that touched each cell: a cell changes once per update.
     mark: Vec<u32>,
+    /// Scratch of [`Grid::insert`]: the cells its rays crossed; all zero between updates.
+    seen: Vec<u8>,
     updates: u32,
     /// The rectangle the grid may grow over (`None`: anywhere), m.
     limit: Option<(DVec2, DVec2)>,
@@ -208,6 +210,7 @@ impl Grid {
             sensed: Vec::new(),
             passable: Vec::new(),
             mark: Vec::new(),
+            seen: Vec::new(),
             updates: 0,
             limit: None,
         }
@@ -422,6 +425,7 @@ impl Grid {
         self.origin = (nx0, ny0);
         (self.width, self.height) = (w, h);
         (self.sensed, self.passable, self.mark) = (sensed, passable, mark);
+        self.seen = vec![0; w * h];
     }
 
     /// Starts an update: every cell changes at most once until the next one, as in
@@ -490,29 +494,43 @@ impl Grid {
         } else {
             Layers::Sensed
         };
-        let (lo, hi, miss) = (self.l_min, self.l_max, self.l_miss);
-        // Slices, not the vectors: their lengths and pointers stay in registers.
-        let (mark, sensed, passable) = (
-            &mut self.mark[..],
-            &mut self.sensed[..],
-            &mut self.passable[..],
-        );
+        // The result depends only on the union of the cells the rays cross (each changes once
+        // per update), so the walks only record that union, one byte store per visit: near
+        // the sensor a dense scan crosses each cell many times. Then every cell of the union
+        // that is not a return of this scan gets its miss, row by row over the scan's extent.
+        let seen = &mut self.seen[..];
         for b in beams {
             let walk = CellWalk::new(b.from, b.to, self.resolution);
+            // Inside the grid: `ensure` covered both ends, so the whole segment.
             let n = walk.len() - usize::from(b.hit);
-            // Inside the grid: `ensure` covered both ends, so the whole segment. Branch-free
-            // per cell (a cell near the sensor is crossed by many rays of a dense scan, so
-            // whether it is fresh is hard to predict).
-            walk.for_each_index(n, self.origin, self.width, |k| {
-                let fresh = mark[k] != stamp;
-                mark[k] = stamp;
-                let s = sensed[k];
-                sensed[k] = if fresh { (s + miss).clamp(lo, hi) } else { s };
-                if layers.passable() {
-                    let p = passable[k];
-                    passable[k] = if fresh { (p + miss).clamp(lo, hi) } else { p };
+            walk.for_each_index(n, self.origin, self.width, |k| seen[k] = 1);
+        }
+        let (l_lo, l_hi, miss) = (self.l_min, self.l_max, self.l_miss);
+        let (i0, i1) = (lo.0 - self.origin.0, hi.0 - self.origin.0 + 1);
+        for j in lo.1 - self.origin.1..=hi.1 - self.origin.1 {
+            let row = j as usize * self.width;
+            let span = row + i0 as usize..row + i1 as usize;
+            let (mark, sensed, passable) = (
+                &self.mark[span.clone()],
+                &mut self.sensed[span.clone()],
+                &mut self.passable[span.clone()],
+            );
+            // Eight cells at a time: most of a scan's extent was not crossed.
+            for (c, chunk) in seen[span].chunks_mut(8).enumerate() {
+                if chunk.iter().all(|&b| b == 0) {
+                    continue;
                 }
-            });
+                for (i, b) in chunk.iter_mut().enumerate() {
+                    let k = c * 8 + i;
+                    if std::mem::take(b) == 0 || mark[k] == stamp {
+                        continue;
+                    }
+                    sensed[k] = (sensed[k] + miss).clamp(l_lo, l_hi);
+                    if layers.passable() {
+                        passable[k] = (passable[k] + miss).clamp(l_lo, l_hi);
+                    }
+                }
+            }
         }
     }
 
@@ -672,6 +690,61 @@ mod tests {
                         proptest::prop_assert_eq!(l, f, "cell {:?}", (i, j));
                     }
                 }
+            }
+        }
+    }
+
+    /// The update as DESIGN §5 states it, cell by cell: every return's cell a hit, every
+    /// other cell some ray crosses one miss, each at most once per scan.
+    fn insert_reference(g: &mut Grid, beams: &[Beam], misses_clear_passable: bool) {
+        let hits: std::collections::BTreeSet<CellIndex> = beams
+            .iter()
+            .filter(|b| b.hit)
+            .map(|b| g.cell_of(b.to))
+            .collect();
+        let crossed: std::collections::BTreeSet<CellIndex> = beams
+            .iter()
+            .flat_map(|b| CellWalk::new(b.from, b.to, g.resolution()))
+            .filter(|c| !hits.contains(c))
+            .collect();
+        g.mark_cells(hits, true, Layers::Both);
+        let layers = if misses_clear_passable {
+            Layers::Both
+        } else {
+            Layers::Sensed
+        };
+        g.mark_cells(crossed, false, layers);
+    }
+
+    proptest::proptest! {
+        /// Scans of many rays from one point (a fan, where a cell near the sensor is crossed
+        /// many times) and of scattered rays give the reference update, scan after scan.
+        #[test]
+        fn insert_equals_the_cell_by_cell_update(
+            origin in (-3.0f64..3.0, -3.0f64..3.0),
+            fan in proptest::bool::ANY,
+            rays in proptest::collection::vec(
+                (0.0f64..std::f64::consts::TAU, 0.0f64..4.0, proptest::bool::ANY,
+                 -4.0f64..4.0, -4.0f64..4.0),
+                1..200,
+            ),
+            passable in proptest::bool::ANY,
+        ) {
+            let beams: Vec<Beam> = rays
+                .iter()
+                .map(|&(a, r, hit, x, y)| {
+                    let from = if fan { DVec2::new(origin.0, origin.1) } else { DVec2::new(x, y) };
+                    Beam { from, to: from + DVec2::from_angle(a) * r, hit }
+                })
+                .collect();
+            let (mut fast, mut slow) = (grid(), grid());
+            for scan in beams.chunks(37) {
+                fast.insert(scan, passable);
+                insert_reference(&mut slow, scan, passable);
+            }
+            let cells = beams.iter().flat_map(|b| CellWalk::new(b.from, b.to, 0.1));
+            for c in cells {
+                proptest::prop_assert_eq!(fast.log_odds(c), slow.log_odds(c), "cell {:?}", c);
             }
         }
     }
