@@ -11,6 +11,7 @@ side, with the range differences against radarnav's exact ranges.
     target/peers/bin/python bench/peers.py --scaling     # 1k/10k/100k, constant density and area
     target/release/radarnav bench foliage-wall --export target/fw && \
       target/peers/bin/python bench/peers.py --scene target/fw    # any scenario's world
+    target/peers/bin/python bench/peers.py --plants      # 1 M triangles: generated trees and bushes
 
 Open3D needs libusb-1.0 (Debian: `apt-get install libusb-1.0-0`). Embree sees the spheres as
 triangle meshes (`--sphere-resolution`, Open3D's create_sphere); Bullet and radarnav as exact
@@ -40,7 +41,15 @@ def load_scene(scene):
     world = json.loads((scene / "world.json").read_text())
     meta = json.loads((scene / "meta.json").read_text())
     rays = np.loadtxt(scene / "rays.csv", delimiter=",", skiprows=1, ndmin=2)
+    if any("mesh" in obj for obj in world):
+        vertices = np.fromfile(scene / "meshes.vertices.f64", dtype="<f8").reshape(-1, 3)
+        triangles = np.fromfile(scene / "meshes.triangles.u32", dtype="<u4").reshape(-1, 3)
+        for obj in world:
+            if "mesh" in obj:
+                (v0, nv), (t0, nt) = obj["mesh"]["vertices"], obj["mesh"]["triangles"]
+                obj["mesh"] = (vertices[v0:v0 + nv], triangles[t0:t0 + nt])
     return world, meta, rays
+
 
 
 def box_mesh(center, size, yaw):
@@ -59,6 +68,11 @@ def embree_scene(world, resolution):
 
     scene = o3d.t.geometry.RaycastingScene(nthreads=1)
     for obj in world:
+        if "mesh" in obj:
+            vertices, triangles = obj["mesh"]
+            scene.add_triangles(o3d.core.Tensor(vertices.astype(np.float32)),
+                                o3d.core.Tensor(triangles.astype(np.uint32)))
+            continue
         if "sphere" in obj:
             x, y, z, r = obj["sphere"]
             mesh = o3d.geometry.TriangleMesh.create_sphere(r, resolution=resolution)
@@ -91,7 +105,12 @@ def bullet_scene(world):
     client = p.connect(p.DIRECT)
     shapes = {}
     for obj in world:
-        if "sphere" in obj:
+        if "mesh" in obj:
+            vertices, triangles = obj["mesh"]
+            s = p.createCollisionShape(p.GEOM_MESH, vertices=vertices.tolist(),
+                                       indices=triangles.reshape(-1).tolist(), physicsClientId=client)
+            p.createMultiBody(0, s, physicsClientId=client)
+        elif "sphere" in obj:
             x, y, z, r = obj["sphere"]
             key = ("sphere", r)
             if key not in shapes:
@@ -173,20 +192,28 @@ def main():
                     help="Open3D create_sphere resolution (10: 1.3 cm median range error)")
     ap.add_argument("--scaling", action="store_true", help="1k/10k/100k spheres, constant density and fixed area")
     ap.add_argument("--scene", help="a scene exported by `radarnav bench [SCENARIO] --export DIR` instead of the forest")
+    ap.add_argument("--plants", type=int, nargs="?", const=1300, metavar="N",
+                    help="a forest of N generated trees and bushes (default 1300: about 1 M triangles) instead of spheres")
+    ap.add_argument("--no-bullet", action="store_true", help="leave Bullet out")
     args = ap.parse_args()
     if not Path(args.radarnav).exists():
         sys.exit(f"{args.radarnav}: build it first (cargo build --release -p radarnav-cli)")
     out = Path(args.out)
     forest = ["--radius", "0.3,1.0", "--poses", "200", "--range", "80"]
 
-    def scene(name, n, side):
+    def scene(name, n, side, *extra):
         d = out / name
-        radarnav(args.radarnav, "bench", "--export", str(d), "--forest", str(n), "--side", str(side), *forest)
+        radarnav(args.radarnav, "bench", "--export", str(d), "--forest", str(n), "--side", str(side), *forest, *extra)
         return d
 
     if not args.scaling:
-        d = Path(args.scene) if args.scene else scene("forest-10k", 10000, 200)
-        meta, med, diffs = measure(args.radarnav, d, args.repeats, args.sphere_resolution)
+        if args.scene:
+            d = Path(args.scene)
+        elif args.plants:
+            d = scene(f"plants-{args.plants}", args.plants, 200, "--plants")
+        else:
+            d = scene("forest-10k", 10000, 200)
+        meta, med, diffs = measure(args.radarnav, d, args.repeats, args.sphere_resolution, bullet=not args.no_bullet)
         print(meta["about"])
         print(f"rays per CPU-second, one thread, median of {args.repeats} interleaved runs:")
         print("| engine | M rays / CPU-s | range vs radarnav (median, p99) | hit/miss disagreements |")

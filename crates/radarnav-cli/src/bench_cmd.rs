@@ -10,7 +10,8 @@ use glam::DVec2;
 use radarnav::peers::{pose_rays, read_scene, write_ranges, write_scene};
 use radarnav::sensor::Tracer;
 use radarnav::world::Band;
-use radarnav::world::forest::{ForestSpec, forest_of};
+use radarnav::world::World;
+use radarnav::world::forest::{ForestSpec, forest_of, plant_forest_of};
 use radarnav::{Pose, Scenario};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -37,8 +38,52 @@ pub fn thread_cpu_seconds() -> f64 {
     }
 }
 
-/// The forest of `--forest N [--side M] [--radius MIN,MAX]`, seeded by the scenario.
-pub fn forest_spec(count: usize, side: Option<f64>, radius: &str) -> Result<ForestSpec> {
+/// The forest of `--forest N [--side M] [--radius MIN,MAX] [--plants]`.
+#[derive(Clone, Copy, Debug)]
+pub struct Forest {
+    /// Where the spheres (or plants) go; seeded by the scenario.
+    pub spec: ForestSpec,
+    /// Generated trees and bushes instead of spheres.
+    pub plants: bool,
+}
+
+impl Forest {
+    /// The forest's world with `seed`.
+    fn world(&self, seed: u64) -> World {
+        let spec = ForestSpec { seed, ..self.spec };
+        if self.plants {
+            plant_forest_of(&spec)
+        } else {
+            forest_of(&spec)
+        }
+    }
+
+    /// What it holds, in words.
+    fn about(&self, world: &World) -> String {
+        let spec = &self.spec;
+        if self.plants {
+            let triangles: usize = (world.objects().iter())
+                .map(|o| match &o.shape {
+                    radarnav::world::Shape::Mesh(m) => m.triangle_count(),
+                    _ => 0,
+                })
+                .sum();
+            format!(
+                "forest: {} generated trees and bushes ({triangles} triangles) where radii {}-{} m fall, over {} x {} m",
+                spec.count, spec.radius.0, spec.radius.1, spec.side, spec.side
+            )
+        } else {
+            format!(
+                "forest: {} spheres, radius {}-{} m, centres uniform over {} x {} m",
+                spec.count, spec.radius.0, spec.radius.1, spec.side, spec.side
+            )
+        }
+    }
+}
+
+/// The forest of `--forest N [--side M] [--radius MIN,MAX] [--plants]`, seeded by the
+/// scenario.
+pub fn forest_spec(count: usize, side: Option<f64>, radius: &str, plants: bool) -> Result<Forest> {
     let parsed: Vec<f64> = radius
         .split(',')
         .map(|v| v.trim().parse::<f64>())
@@ -56,31 +101,28 @@ pub fn forest_spec(count: usize, side: Option<f64>, radius: &str) -> Result<Fore
     }
     // --forest and --side are range-checked by the argument parser.
     let side = side.unwrap_or(3.0 * (count as f64).sqrt());
-    Ok(ForestSpec {
-        count,
-        side,
-        radius: (lo, hi),
-        clearing: 2.0,
-        seed: 0,
+    Ok(Forest {
+        spec: ForestSpec {
+            count,
+            side,
+            radius: (lo, hi),
+            clearing: 2.0,
+            seed: 0,
+        },
+        plants,
     })
 }
 
 /// Times `scans` scans of every sensor of the scenario's first robot (in the forest of
 /// `forest` instead of its world, at the forest's centre).
-pub fn scans(mut s: Scenario, scans: usize, forest: Option<&ForestSpec>) -> Result<()> {
+pub fn scans(mut s: Scenario, scans: usize, forest: Option<&Forest>) -> Result<()> {
     let mut start = s
         .robot(None)
         .with_context(|| format!("scenario `{}` has no robot", s.name))?
         .start;
-    if let Some(spec) = forest {
-        s.world = forest_of(&ForestSpec {
-            seed: s.sim.seed,
-            ..*spec
-        });
-        s.name = format!(
-            "forest of {} spheres over {:.0} m, sensors of {}",
-            spec.count, spec.side, s.name
-        );
+    if let Some(forest) = forest {
+        s.world = forest.world(s.sim.seed);
+        s.name = format!("{}, sensors of {}", forest.about(&s.world), s.name);
         start = Pose::default();
     }
     let r = s.robot(None).context("scenario has no robot")?;
@@ -119,7 +161,7 @@ pub fn scans(mut s: Scenario, scans: usize, forest: Option<&ForestSpec>) -> Resu
 /// `--export DIR`: the world (or the forest) and rays from `poses` random free poses.
 pub fn export(
     s: &Scenario,
-    forest: Option<&ForestSpec>,
+    forest: Option<&Forest>,
     dir: &Path,
     poses: usize,
     range: f64,
@@ -131,18 +173,16 @@ pub fn export(
         bail!("--poses {poses}: expected 1 to 100000");
     }
     let (world, area, about) = match forest {
-        Some(spec) => {
+        Some(forest) => {
             let spec = ForestSpec {
                 clearing: 0.0,
-                seed: s.sim.seed,
-                ..*spec
+                ..forest.spec
             };
+            let forest = Forest { spec, ..*forest };
+            let world = forest.world(s.sim.seed);
             let half = DVec2::splat(spec.side / 2.0);
-            let about = format!(
-                "forest: {} spheres, radius {}-{} m, centres uniform over {} x {} m, seed {}",
-                spec.count, spec.radius.0, spec.radius.1, spec.side, spec.side, spec.seed
-            );
-            (forest_of(&spec), (-half, half), about)
+            let about = format!("{}, seed {}", forest.about(&world), s.sim.seed);
+            (world, (-half, half), about)
         }
         None => {
             let (lo, hi) = s

@@ -286,6 +286,11 @@ enum Command {
         /// Radii of the forest's spheres, `MIN,MAX` metres.
         #[arg(long, default_value = "0.3,1.5")]
         radius: String,
+        /// Grow the forest as generated trees and bushes (triangle meshes, about 770 a plant)
+        /// where it would have spheres: a tree for a radius above the middle of --radius, else
+        /// a bush as high as the sphere.
+        #[arg(long, requires = "forest")]
+        plants: bool,
         /// Simulate this many seconds of the scenario's mission (waypoints repeat) without
         /// recording, and print simulated time per wall time.
         #[arg(long, value_parser = number(&limits::BENCH_SIM))]
@@ -569,6 +574,7 @@ fn run(cli: Cli) -> Result<()> {
             forest,
             side,
             radius,
+            plants,
             sim,
             export,
             poses,
@@ -578,7 +584,7 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => {
             let forest = forest
-                .map(|n| bench_cmd::forest_spec(n, side, &radius))
+                .map(|n| bench_cmd::forest_spec(n, side, &radius, plants))
                 .transpose()?;
             if let Some(dir) = rays {
                 return bench_cmd::trace_rays(&dir, repeats, json);

@@ -3,8 +3,11 @@
 //! objects (`bench/peers.py`).
 //!
 //! A scene directory holds `world.json` (the objects as primitives: spheres, boxes with yaw,
-//! vertical cylinders; a wall as one box per segment), `rays.csv` (`ox,oy,oz,dx,dy,dz`, unit
-//! directions) and `meta.json` (range and how the scene was made).
+//! vertical cylinders; a wall as one box per segment; triangle meshes as slices of
+//! `meshes.vertices.f64` (x, y, z little-endian f64 per vertex) and `meshes.triangles.u32`
+//! (three little-endian u32 vertex indices per triangle, counted from the mesh's first
+//! vertex)), `rays.csv` (`ox,oy,oz,dx,dy,dz`, unit directions) and `meta.json` (range and how
+//! the scene was made).
 
 use std::fs;
 use std::io::{BufRead, BufReader, BufWriter, Write};
@@ -17,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::world::forest::{ForestSpec, forest_of};
+use crate::world::mesh::TriMesh;
 use crate::world::{MaterialTable, Object, Ray, Shape, World};
 
 /// A failure to write or read a scene directory.
@@ -64,7 +68,21 @@ pub enum Primitive {
         /// Height.
         height: f64,
     },
+    /// A triangle mesh: vertices `vertices.0..vertices.0 + vertices.1` of
+    /// [`MESH_VERTICES`], triangles `triangles.0..triangles.0 + triangles.1` of
+    /// [`MESH_TRIANGLES`].
+    Mesh {
+        /// First vertex and count.
+        vertices: (usize, usize),
+        /// First triangle and count.
+        triangles: (usize, usize),
+    },
 }
+
+/// The file of every mesh's vertices in a scene directory.
+pub const MESH_VERTICES: &str = "meshes.vertices.f64";
+/// The file of every mesh's triangles in a scene directory.
+pub const MESH_TRIANGLES: &str = "meshes.triangles.u32";
 
 /// One object of `world.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -155,7 +173,7 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SceneError + '_ {
 }
 
 /// Writes `world` and `rays` to `dir` (created if missing). Prisms have no primitive here and
-/// are left out (their count is returned).
+/// are left out (their count is returned); meshes go to the two mesh files.
 pub fn write_scene(
     dir: &Path,
     world: &World,
@@ -167,6 +185,8 @@ pub fn write_scene(
     let names = world.materials();
     let mut objects = Vec::new();
     let mut skipped = 0;
+    let (mut vertices, mut triangles) = (Vec::<u8>::new(), Vec::<u8>::new());
+    let (mut nv, mut nt) = (0, 0);
     for o in world.objects() {
         let material = names.get(o.material).name.clone();
         let mut push = |primitive| {
@@ -202,8 +222,28 @@ pub fn write_scene(
                     });
                 }
             }
-            Shape::Prism { .. } | Shape::Mesh(_) => skipped += 1,
+            Shape::Mesh(m) => {
+                for v in m.vertices() {
+                    vertices.extend(v.to_array().iter().flat_map(|x| x.to_le_bytes()));
+                }
+                for t in m.triangles() {
+                    triangles.extend(t.iter().flat_map(|i| i.to_le_bytes()));
+                }
+                let (v, t) = (m.vertices().len(), m.triangles().len());
+                push(Primitive::Mesh {
+                    vertices: (nv, v),
+                    triangles: (nt, t),
+                });
+                (nv, nt) = (nv + v, nt + t);
+            }
+            Shape::Prism { .. } => skipped += 1,
         }
+    }
+    for (name, bytes) in [(MESH_VERTICES, &vertices), (MESH_TRIANGLES, &triangles)] {
+        let path = dir.join(name);
+        let part = partial(&path);
+        fs::write(&part, bytes).map_err(io(&part))?;
+        fs::rename(&part, &path).map_err(io(&path))?;
     }
     let meta = SceneMeta {
         range,
@@ -278,6 +318,7 @@ pub fn read_scene(dir: &Path) -> Result<(World, Vec<Ray>, f64), SceneError> {
             .map_err(|e| bad(&path, e.to_string()))?;
     let materials = MaterialTable::default();
     let mut objects = Vec::with_capacity(list.len());
+    let meshes = MeshFiles::read(dir, &list)?;
     for (i, o) in list.iter().enumerate() {
         let material = materials.id(&o.material).ok_or_else(|| {
             bad(
@@ -286,15 +327,24 @@ pub fn read_scene(dir: &Path) -> Result<(World, Vec<Ray>, f64), SceneError> {
             )
         })?;
         let shape = match o.primitive {
-            Primitive::Sphere([x, y, z, r]) => Shape::sphere(DVec3::new(x, y, z), r),
+            Primitive::Sphere([x, y, z, r]) => {
+                Shape::sphere(DVec3::new(x, y, z), r).map_err(|e| e.to_string())
+            }
             Primitive::Box { center, size, yaw } => {
                 Shape::cuboid(DVec3::from(center), DVec3::from(size), yaw)
+                    .map_err(|e| e.to_string())
             }
             Primitive::Cylinder {
                 center,
                 radius,
                 height,
-            } => Shape::cylinder(DVec3::from(center), radius, height),
+            } => Shape::cylinder(DVec3::from(center), radius, height).map_err(|e| e.to_string()),
+            Primitive::Mesh {
+                vertices,
+                triangles,
+            } => meshes
+                .mesh(vertices, triangles)
+                .map(|m| Shape::Mesh(std::sync::Arc::new(m))),
         }
         .map_err(|e| bad(&path, format!("object {i}: {e}")))?;
         objects.push(Object {
@@ -331,6 +381,64 @@ pub fn read_scene(dir: &Path) -> Result<(World, Vec<Ray>, f64), SceneError> {
     Ok((World::new(materials, objects), rays, meta.range))
 }
 
+/// The two mesh files of a scene, read when `world.json` names a mesh.
+struct MeshFiles {
+    vertices: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl MeshFiles {
+    fn read(dir: &Path, list: &[SceneObject]) -> Result<Self, SceneError> {
+        let mut files = Self {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        if !list
+            .iter()
+            .any(|o| matches!(o.primitive, Primitive::Mesh { .. }))
+        {
+            return Ok(files);
+        }
+        let read = |name: &str, unit: usize| -> Result<Vec<u8>, SceneError> {
+            let path = dir.join(name);
+            let bytes = fs::read(&path).map_err(io(&path))?;
+            if bytes.len() % unit != 0 {
+                return Err(SceneError::Format {
+                    path,
+                    what: format!("{} bytes, not whole records of {unit}", bytes.len()),
+                });
+            }
+            Ok(bytes)
+        };
+        let f64s = |b: &[u8]| f64::from_le_bytes(b.try_into().expect("8 bytes"));
+        let u32s = |b: &[u8]| u32::from_le_bytes(b.try_into().expect("4 bytes"));
+        files.vertices = read(MESH_VERTICES, 24)?
+            .chunks_exact(24)
+            .map(|v| DVec3::new(f64s(&v[..8]), f64s(&v[8..16]), f64s(&v[16..])))
+            .collect();
+        files.triangles = read(MESH_TRIANGLES, 12)?
+            .chunks_exact(12)
+            .map(|t| [u32s(&t[..4]), u32s(&t[4..8]), u32s(&t[8..])])
+            .collect();
+        Ok(files)
+    }
+
+    /// The mesh of the given slices (its indices count from its first vertex).
+    fn mesh(&self, (v0, nv): (usize, usize), (t0, nt): (usize, usize)) -> Result<TriMesh, String> {
+        let slice = |start: usize, n: usize, len: usize, what: &str| {
+            start
+                .checked_add(n)
+                .filter(|&end| end <= len)
+                .map(|end| start..end)
+                .ok_or_else(|| format!("{what} {start}..{start}+{n} beyond the {len} in the file"))
+        };
+        let vs = slice(v0, nv, self.vertices.len(), "vertices")?;
+        let ts = slice(t0, nt, self.triangles.len(), "triangles")?;
+        TriMesh::new(self.vertices[vs].to_vec(), self.triangles[ts].to_vec())
+            .map_err(|e| e.to_string())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -359,6 +467,60 @@ mod tests {
         for r in &rays {
             assert!(tracer.trace(&world, r, Band::Laser, 0.0, 80.0).range > 0.0);
         }
+    }
+
+    #[test]
+    fn a_plant_forest_reads_back_with_its_meshes_and_bad_slices_are_refused() {
+        let spec = ForestSpec {
+            count: 12,
+            side: 30.0,
+            radius: (0.3, 1.0),
+            clearing: 0.0,
+            seed: 2,
+        };
+        let world = crate::world::forest::plant_forest_of(&spec);
+        let rays = pose_rays(
+            &world,
+            (DVec2::splat(-15.0), DVec2::splat(15.0)),
+            4,
+            90,
+            0.4,
+            2,
+        );
+        let dir = std::env::temp_dir().join(format!("radarnav-peers-mesh-{}", std::process::id()));
+        write_scene(&dir, &world, &rays, 40.0, "test").unwrap();
+        let (back, back_rays, _) = read_scene(&dir).unwrap();
+        assert_eq!(back.objects(), world.objects());
+        assert_eq!(back_rays, rays);
+        let mut tracer = crate::sensor::Tracer::default();
+        for r in &rays {
+            assert_eq!(
+                tracer.trace(&world, r, Band::Laser, 0.0, 40.0),
+                tracer.trace(&back, r, Band::Laser, 0.0, 40.0)
+            );
+        }
+        // A slice past the end of the mesh files names the object.
+        let text = fs::read_to_string(dir.join("world.json")).unwrap();
+        let list: Vec<SceneObject> = serde_json::from_str(&text).unwrap();
+        let mut list = list;
+        list[0].primitive = Primitive::Mesh {
+            vertices: (0, 3),
+            triangles: (1 << 40, 1),
+        };
+        fs::write(
+            dir.join("world.json"),
+            serde_json::to_string(&list).unwrap(),
+        )
+        .unwrap();
+        let e = read_scene(&dir).unwrap_err().to_string();
+        assert!(e.contains("world.json: object 0: triangles"), "{e}");
+        fs::write(dir.join(MESH_TRIANGLES), [0u8; 5]).unwrap();
+        let e = read_scene(&dir).unwrap_err().to_string();
+        assert!(
+            e.contains(MESH_TRIANGLES) && e.contains("whole records"),
+            "{e}"
+        );
+        fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -1,9 +1,12 @@
-//! A generated forest: many foliage spheres over a square, for benchmarks and stress tests.
+//! Generated forests for benchmarks and stress tests: many foliage spheres over a square, or
+//! as many generated trees and bushes (triangle meshes).
 
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::mesh::TriMesh;
+use super::procedural::{BARK, Plant, grow};
 use super::{MaterialTable, Object, Shape, World};
 
 /// What [`forest_of`] grows.
@@ -61,4 +64,83 @@ pub fn forest_of(spec: &ForestSpec) -> World {
         });
     }
     World::new(materials, objects)
+}
+
+/// The plants of [`plant_forest_of`]: `spec`'s positions and seed, a generated tree (5–8 m,
+/// bark `wood`) where the sphere forest has a sphere of radius above the middle of its range,
+/// else a bush as high as that sphere's diameter; leaves one in four `foliage_dense`, the rest
+/// `foliage_light`; each plant turned by a random yaw. Same spec, same forest.
+pub fn plant_forest_of(spec: &ForestSpec) -> World {
+    let materials = MaterialTable::default();
+    let light = materials.id("foliage_light").expect("built-in material");
+    let dense = materials.id("foliage_dense").expect("built-in material");
+    let wood = materials.id("wood").expect("built-in material");
+    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+    let half = spec.side / 2.0;
+    let middle = (spec.radius.0 + spec.radius.1) / 2.0;
+    let mut objects = Vec::new();
+    let mut plants = 0;
+    while plants < spec.count {
+        let (x, y) = (rng.random_range(-half..half), rng.random_range(-half..half));
+        let r = rng.random_range(spec.radius.0..spec.radius.1);
+        if spec.clearing > 0.0 && x.hypot(y) < r + spec.clearing {
+            continue;
+        }
+        let leaves = if rng.random_range(0..4) == 0 {
+            dense
+        } else {
+            light
+        };
+        let (sin, cos) = rng.random_range(0.0..std::f64::consts::TAU).sin_cos();
+        let (plant, height) = if r > middle {
+            (Plant::Tree, rng.random_range(5.0..8.0))
+        } else {
+            (Plant::Bush, 2.0 * r)
+        };
+        for part in grow(plant, height, rng.random()) {
+            let vertices = (part.vertices.iter())
+                .map(|v| DVec3::new(x + cos * v.x - sin * v.y, y + sin * v.x + cos * v.y, v.z))
+                .collect();
+            let mesh = TriMesh::new(vertices, part.triangles).expect("a generated plant is a mesh");
+            let bark = part.material.as_deref() == Some(BARK);
+            objects.push(Object {
+                name: None,
+                shape: Shape::Mesh(std::sync::Arc::new(mesh)),
+                material: if bark { wood } else { leaves },
+            });
+        }
+        plants += 1;
+    }
+    World::new(materials, objects)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plant_forest_is_seeded_and_closed() {
+        let spec = ForestSpec {
+            count: 6,
+            side: 30.0,
+            radius: (0.3, 1.0),
+            clearing: 2.0,
+            seed: 4,
+        };
+        let w = plant_forest_of(&spec);
+        assert_eq!(
+            w.objects(),
+            plant_forest_of(&spec).objects(),
+            "same seed, same forest"
+        );
+        assert!(w.objects().len() >= 6, "a part or two per plant");
+        for o in w.objects() {
+            let Shape::Mesh(m) = &o.shape else {
+                panic!("a plant is a mesh")
+            };
+            assert!(m.is_closed());
+            let (lo, hi) = m.aabb();
+            assert!(lo.z >= 0.0 && hi.z <= 8.0 && lo.truncate().length() > 0.0);
+        }
+    }
 }

@@ -70,8 +70,11 @@ pub struct MeshPart {
 /// `start`; a leaf holds `order[start..start + count]`.
 #[derive(Clone, Debug, PartialEq)]
 struct Node {
-    lo: DVec3,
-    hi: DVec3,
+    /// Bounds in single precision, rounded outward: a node holds every point of its
+    /// triangles, so a query visits all it visited in double precision (and at most a few
+    /// more), and two nodes share a cache line.
+    lo: [f32; 3],
+    hi: [f32; 3],
     start: u32,
     /// 0 for an inner node.
     count: u32,
@@ -86,6 +89,8 @@ pub struct TriMesh {
     closed: bool,
     /// Edges used by only one triangle (0 for a closed mesh).
     boundary_edges: usize,
+    /// Exact bounds `(min, max)` of the vertices.
+    bounds: (DVec3, DVec3),
     nodes: Vec<Node>,
     order: Vec<u32>,
     /// The corners of triangle `order[k]` at `k`: a leaf's triangles side by side.
@@ -173,6 +178,18 @@ impl Sheared {
     }
 }
 
+/// The largest `f32` at or below `x`.
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) > x { f.next_down() } else { f }
+}
+
+/// The smallest `f32` at or above `x`.
+fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) < x { f.next_up() } else { f }
+}
+
 /// Whether the line of `ray` (any t) meets the box `lo..hi`.
 fn line_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
     let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -239,6 +256,7 @@ impl TriMesh {
             triangles,
             closed,
             boundary_edges,
+            bounds: (DVec3::ZERO, DVec3::ZERO),
             nodes: Vec::new(),
             order: Vec::new(),
             corners_in_order: Vec::new(),
@@ -305,8 +323,7 @@ impl TriMesh {
 
     /// Axis-aligned bounds `(min, max)`.
     pub fn aabb(&self) -> (DVec3, DVec3) {
-        let n = &self.nodes[0];
-        (n.lo, n.hi)
+        self.bounds
     }
 
     fn build(&mut self) {
@@ -336,10 +353,13 @@ impl TriMesh {
             (lo, hi) = (lo.min(a), hi.max(b));
             (clo, chi) = (clo.min(c), chi.max(c));
         }
+        if self.nodes.is_empty() {
+            self.bounds = (lo, hi);
+        }
         let me = self.nodes.len();
         self.nodes.push(Node {
-            lo,
-            hi,
+            lo: lo.to_array().map(f32_down),
+            hi: hi.to_array().map(f32_up),
             start: start as u32,
             count: (end - start) as u32,
         });
@@ -375,7 +395,10 @@ impl TriMesh {
             top -= 1;
             let i = stack[top] as usize;
             let n = &self.nodes[i];
-            if !keep(n.lo, n.hi) {
+            if !keep(
+                DVec3::from(n.lo.map(f64::from)),
+                DVec3::from(n.hi.map(f64::from)),
+            ) {
                 continue;
             }
             if n.count == 0 {
@@ -400,6 +423,30 @@ impl TriMesh {
                 out.extend(sheared.cross(a, b, c));
             },
         );
+    }
+
+    /// Whether an interval of [`TriMesh::ray_intervals`] can overlap `(0, t_max)`: the ray's
+    /// stretch from just behind its origin to just past `t_max` meets the mesh's bounds
+    /// (grown by a sheet and far more than rounding), where every crossing lies. A cheap test
+    /// before the crossings: the cells along a ray list many meshes it passes by.
+    pub fn may_meet(&self, ray: &Ray, t_max: f64) -> bool {
+        let (lo, hi) = self.bounds;
+        let pad = 2.0 * SURFACE_THICKNESS + 1e-9 * (lo.abs().max(hi.abs()).max_element() + t_max);
+        let (lo, hi) = (lo - pad, hi + pad);
+        let (mut t0, mut t1) = (-pad, t_max + pad);
+        for i in 0..3 {
+            let (o, d) = (ray.origin[i], ray.dir[i]);
+            if d == 0.0 {
+                if o < lo[i] || o > hi[i] {
+                    return false;
+                }
+            } else {
+                let (a, b) = ((lo[i] - o) / d, (hi[i] - o) / d);
+                t0 = t0.max(a.min(b));
+                t1 = t1.min(a.max(b));
+            }
+        }
+        t0 <= t1
     }
 
     /// Appends to `out` the disjoint intervals, in increasing order, where the ray's whole
@@ -960,6 +1007,52 @@ pub(crate) mod tests {
                 let inside = iv.iter().any(|&(a, b)| t > a && t < b);
                 prop_assert_eq!(inside, brute_inside(&m, p), "t {} p {}", t, p);
                 prop_assert_eq!(inside, m.contains(p), "contains at t {}", t);
+            }
+        }
+
+        /// A ray that `may_meet` turns away has no interval overlapping `(0, t_max)`, from
+        /// anywhere (inside the bounds too), for open and closed meshes; and the single-precision
+        /// node bounds hold every vertex of their triangles.
+        #[test]
+        fn may_meet_never_turns_away_an_interval(
+            o in prop::array::uniform3(-1.0..4.0f64),
+            d in prop::array::uniform3(-1.0..1.0f64),
+            t_max in prop_oneof![0.0..0.3f64, 0.0..6.0f64],
+            snap in 0usize..3,
+            open in proptest::bool::ANY,
+        ) {
+            let m = if open {
+                let v = vec![DVec3::new(0.5, 0.5, 0.5), DVec3::new(2.5, 0.5, 0.7), DVec3::new(1.0, 2.5, 1.9)];
+                TriMesh::new(v, vec![[0, 1, 2]]).expect("a sheet")
+            } else {
+                two_cubes()
+            };
+            prop_assume!(DVec3::from(d).length() > 0.1);
+            let mut origin = DVec3::from(o);
+            if snap == 1 {
+                origin = origin.round();
+            }
+            let mut dir = DVec3::from(d);
+            if snap == 2 {
+                dir = DVec3::X * dir.x.signum(); // along an axis, in faces' planes
+            }
+            let ray = Ray::new(origin, dir);
+            if !m.may_meet(&ray, t_max) {
+                let iv = intervals(&m, &ray);
+                prop_assert!(
+                    !iv.iter().any(|&(a, b)| b > 0.0 && a < t_max),
+                    "{:?} turned away, intervals {:?}", ray, iv
+                );
+            }
+            for (i, n) in m.nodes.iter().enumerate() {
+                if n.count > 0 {
+                    for k in n.start..n.start + n.count {
+                        for v in m.corners_in_order[k as usize] {
+                            let (lo, hi) = (DVec3::from(n.lo.map(f64::from)), DVec3::from(n.hi.map(f64::from)));
+                            prop_assert!(v.cmpge(lo).all() && v.cmple(hi).all(), "node {}", i);
+                        }
+                    }
+                }
             }
         }
 

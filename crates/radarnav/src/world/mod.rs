@@ -688,6 +688,12 @@ impl World {
         mut take: impl FnMut(Interval),
     ) {
         let obj = &self.objects[index as usize];
+        // The cells along a ray list many meshes it passes by: their bounds first.
+        if let Shape::Mesh(m) = &obj.shape
+            && !m.may_meet(ray, t_max)
+        {
+            return;
+        }
         spans.clear();
         obj.shape.ray_intervals(ray, spans);
         for &(t_in, t_out) in spans.iter() {
