@@ -239,7 +239,8 @@ pub fn write_scene(
             Shape::Prism { .. } => skipped += 1,
         }
     }
-    for (name, bytes) in [(MESH_VERTICES, &vertices), (MESH_TRIANGLES, &triangles)] {
+    let meshes = [(MESH_VERTICES, &vertices), (MESH_TRIANGLES, &triangles)];
+    for (name, bytes) in meshes.into_iter().filter(|_| nt > 0) {
         let path = dir.join(name);
         let part = partial(&path);
         fs::write(&part, bytes).map_err(io(&part))?;

@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::mesh::TriMesh;
 use super::procedural::{BARK, Plant, grow};
-use super::{MaterialTable, Object, Shape, World};
+use super::{MaterialId, MaterialTable, Object, Shape, World};
 
 /// What [`forest_of`] grows.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,81 +37,94 @@ pub fn forest(count: usize, side: f64, seed: u64) -> World {
     })
 }
 
-/// The forest of `spec`: spheres resting on the ground, one in four `foliage_dense`, the rest
-/// `foliage_light`. Same spec, same forest.
-pub fn forest_of(spec: &ForestSpec) -> World {
+/// One place of a forest: where, how large, and its foliage.
+struct Spot {
+    x: f64,
+    y: f64,
+    radius: f64,
+    foliage: MaterialId,
+}
+
+/// Draws `spec.count` spots uniformly over the square (outside the clearing), one in four
+/// `foliage_dense`, the rest `foliage_light`, and hands each to `fill` with the draws and the
+/// objects so far, to put something there. Same spec, same spots.
+fn scatter(
+    spec: &ForestSpec,
+    mut fill: impl FnMut(&mut ChaCha8Rng, &MaterialTable, Spot, &mut Vec<Object>),
+) -> World {
     let materials = MaterialTable::default();
     let light = materials.id("foliage_light").expect("built-in material");
     let dense = materials.id("foliage_dense").expect("built-in material");
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let half = spec.side / 2.0;
     let mut objects = Vec::with_capacity(spec.count);
-    while objects.len() < spec.count {
+    let mut placed = 0;
+    while placed < spec.count {
         let (x, y) = (rng.random_range(-half..half), rng.random_range(-half..half));
-        let r = rng.random_range(spec.radius.0..spec.radius.1);
-        if spec.clearing > 0.0 && x.hypot(y) < r + spec.clearing {
+        let radius = rng.random_range(spec.radius.0..spec.radius.1);
+        if spec.clearing > 0.0 && x.hypot(y) < radius + spec.clearing {
             continue;
         }
-        let material = if rng.random_range(0..4) == 0 {
+        let foliage = if rng.random_range(0..4) == 0 {
             dense
         } else {
             light
         };
-        objects.push(Object {
-            name: None,
-            shape: Shape::sphere(DVec3::new(x, y, r), r).expect("positive radius"),
-            material,
-        });
+        let spot = Spot {
+            x,
+            y,
+            radius,
+            foliage,
+        };
+        fill(&mut rng, &materials, spot, &mut objects);
+        placed += 1;
     }
     World::new(materials, objects)
 }
 
-/// The plants of [`plant_forest_of`]: `spec`'s positions and seed, a generated tree (5–8 m,
-/// bark `wood`) where the sphere forest has a sphere of radius above the middle of its range,
-/// else a bush as high as that sphere's diameter; leaves one in four `foliage_dense`, the rest
-/// `foliage_light`; each plant turned by a random yaw. Same spec, same forest.
+/// The forest of `spec`: spheres resting on the ground, one in four `foliage_dense`, the rest
+/// `foliage_light`. Same spec, same forest.
+pub fn forest_of(spec: &ForestSpec) -> World {
+    scatter(spec, |_, _, s, objects| {
+        objects.push(Object {
+            name: None,
+            shape: Shape::sphere(DVec3::new(s.x, s.y, s.radius), s.radius)
+                .expect("positive radius"),
+            material: s.foliage,
+        })
+    })
+}
+
+/// The forest of `spec` grown as plants: a generated tree (5–8 m, bark `wood`) where
+/// [`forest_of`] puts a sphere of radius above the middle of its range, else a bush as high as
+/// that sphere; its leaves of the sphere's foliage; each plant turned by a random yaw. Same
+/// spec, same forest.
 pub fn plant_forest_of(spec: &ForestSpec) -> World {
-    let materials = MaterialTable::default();
-    let light = materials.id("foliage_light").expect("built-in material");
-    let dense = materials.id("foliage_dense").expect("built-in material");
-    let wood = materials.id("wood").expect("built-in material");
-    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
-    let half = spec.side / 2.0;
     let middle = (spec.radius.0 + spec.radius.1) / 2.0;
-    let mut objects = Vec::new();
-    let mut plants = 0;
-    while plants < spec.count {
-        let (x, y) = (rng.random_range(-half..half), rng.random_range(-half..half));
-        let r = rng.random_range(spec.radius.0..spec.radius.1);
-        if spec.clearing > 0.0 && x.hypot(y) < r + spec.clearing {
-            continue;
-        }
-        let leaves = if rng.random_range(0..4) == 0 {
-            dense
-        } else {
-            light
-        };
+    scatter(spec, |rng, materials, s, objects| {
+        let wood = materials.id("wood").expect("built-in material");
         let (sin, cos) = rng.random_range(0.0..std::f64::consts::TAU).sin_cos();
-        let (plant, height) = if r > middle {
+        let (plant, height) = if s.radius > middle {
             (Plant::Tree, rng.random_range(5.0..8.0))
         } else {
-            (Plant::Bush, 2.0 * r)
+            (Plant::Bush, 2.0 * s.radius)
         };
         for part in grow(plant, height, rng.random()) {
             let vertices = (part.vertices.iter())
-                .map(|v| DVec3::new(x + cos * v.x - sin * v.y, y + sin * v.x + cos * v.y, v.z))
+                .map(|v| {
+                    let x = s.x + cos * v.x - sin * v.y;
+                    DVec3::new(x, s.y + sin * v.x + cos * v.y, v.z)
+                })
                 .collect();
             let mesh = TriMesh::new(vertices, part.triangles).expect("a generated plant is a mesh");
             let bark = part.material.as_deref() == Some(BARK);
             objects.push(Object {
                 name: None,
                 shape: Shape::Mesh(std::sync::Arc::new(mesh)),
-                material: if bark { wood } else { leaves },
+                material: if bark { wood } else { s.foliage },
             });
         }
-        plants += 1;
-    }
-    World::new(materials, objects)
+    })
 }
 
 #[cfg(test)]

@@ -192,7 +192,13 @@ fn f32_up(x: f64) -> f32 {
 
 /// Whether the line of `ray` (any t) meets the box `lo..hi`.
 fn line_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
-    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    stretch_meets_box(ray, inv, lo, hi, (f64::NEG_INFINITY, f64::INFINITY))
+}
+
+/// Whether the stretch `t0..=t1` of the line of `ray` (`inv`: its direction's reciprocal)
+/// meets the box `lo..hi`.
+fn stretch_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3, (t0, t1): (f64, f64)) -> bool {
+    let (mut t0, mut t1) = (t0, t1);
     for i in 0..3 {
         let (o, d) = (ray.origin[i], ray.dir[i]);
         if d == 0.0 {
@@ -433,20 +439,7 @@ impl TriMesh {
         let (lo, hi) = self.bounds;
         let pad = 2.0 * SURFACE_THICKNESS + 1e-9 * (lo.abs().max(hi.abs()).max_element() + t_max);
         let (lo, hi) = (lo - pad, hi + pad);
-        let (mut t0, mut t1) = (-pad, t_max + pad);
-        for i in 0..3 {
-            let (o, d) = (ray.origin[i], ray.dir[i]);
-            if d == 0.0 {
-                if o < lo[i] || o > hi[i] {
-                    return false;
-                }
-            } else {
-                let (a, b) = ((lo[i] - o) / d, (hi[i] - o) / d);
-                t0 = t0.max(a.min(b));
-                t1 = t1.min(a.max(b));
-            }
-        }
-        t0 <= t1
+        stretch_meets_box(ray, ray.dir.recip(), lo, hi, (-pad, t_max + pad))
     }
 
     /// Appends to `out` the disjoint intervals, in increasing order, where the ray's whole
