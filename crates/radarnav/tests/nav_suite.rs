@@ -142,3 +142,35 @@ fn bug1_in_a_dense_crate_room_leaves_for_the_neighbour_in_its_way_without_touchi
         assert!(r.passed(), "{why}");
     }
 }
+
+#[test]
+fn bug2_in_clusters_takes_up_the_neighbour_that_blocked_its_crossings() {
+    // Round a cluster of crates (or bushes) the m-line was crossed nearer the goal, but a
+    // neighbour outside the loop blocked the way there, and Bug2 came back to its hit point:
+    // `no_path` on a reachable goal (crates, all standoffs), or, leaving on the way out of a
+    // gap farther from the goal than the hit point, the same loop for ever (bushes: a
+    // timeout after 308 m). The loop leaves the goal outside, so Bug2 goes back to the
+    // nearest blocked crossing and takes the neighbour up; it leaves only nearer the goal
+    // than its hit point.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let runs: Vec<_> = [("nav/crates-dense", 1), ("nav/bush-field", 3)]
+        .par_iter()
+        .map(|&(name, seed)| {
+            let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
+            let trial = Trial {
+                algorithm: BugAlgorithm::Bug2,
+                sensor: SensorClass::Laser,
+                pose: PoseSource::Truth,
+                seed,
+            };
+            map.run(&trial).expect("the run starts")
+        })
+        .collect();
+    for r in &runs {
+        let why = failures(std::slice::from_ref(r)).join("\n");
+        assert_eq!(r.bumps, 0, "{why}");
+        assert!(r.passed(), "{why}");
+    }
+}

@@ -23,8 +23,13 @@
 //!   line between two calls, or a position within `mline_tolerance` of it, between start and
 //!   goal. Where the body's corridor toward the goal is blocked at the crossing itself (the
 //!   corner of a neighbouring obstacle), the leave waits for the loop tolerance along the
-//!   boundary, and a crossing inside a gap being passed counts until the robot is through.
-//!   Back at the hit point without such a crossing: `no_path`.
+//!   boundary, and a crossing inside a gap being passed counts until the robot is through
+//!   (leaving there only nearer the goal than the hit point, so each next hit point is
+//!   nearer). Back at the hit point without such a crossing: `no_path` when the goal lies
+//!   beyond the loop's boundary (as for Bug1). Otherwise the m-line leaves the loop nearer
+//!   the goal, so a crossing was met there with the way blocked by a neighbour outside the
+//!   loop: the robot goes on round to the blocked crossing nearest the goal and leaves
+//!   there to take the neighbour up (`no_path` if it does not meet it within half a loop).
 //!
 //! The goal is reached within `tolerance` of it. The pose used is the odometry, or the true
 //! pose when the mission asks for it; "back at the hit point" means within
@@ -205,7 +210,8 @@ pub struct RetryReport {
 #[derive(Clone, Debug)]
 enum Mode {
     ToGoal,
-    Follow(Boundary),
+    /// Boxed: the boundary's record is large beside `ToGoal`.
+    Follow(Box<Boundary>),
 }
 
 #[derive(Clone, Debug)]
@@ -247,6 +253,13 @@ struct Boundary {
     leave: Option<f64>,
     /// The followed path: (position, heading, distance followed), every [`TRAIL_STEP`].
     trail: Vec<(DVec2, f64, f64)>,
+    /// Distance followed where the closed loop begins: 0 when it closed at the hit point,
+    /// else where the path it closed on was followed.
+    loop_from: f64,
+    /// Bug2: the crossing nearest the goal met so far, closer than the hit point but left
+    /// behind because the way toward the goal was blocked there: (position, distance to the
+    /// goal, distance followed).
+    blocked_crossing: Option<(DVec2, f64, f64)>,
 }
 
 impl Boundary {
@@ -269,6 +282,8 @@ impl Boundary {
             on_mline: true,
             leave: None,
             trail: Vec::new(),
+            loop_from: 0.0,
+            blocked_crossing: None,
         }
     }
 
@@ -303,12 +318,22 @@ impl Boundary {
                 .iter()
                 .take_while(|s| s.2 <= first)
                 .any(|s| same_way(&s));
-        back_at_hit
-            || self
-                .trail
-                .iter()
-                .take_while(|s| s.2 <= old)
-                .any(|s| same_way(&s))
+        if back_at_hit {
+            self.loop_from = 0.0;
+            return true;
+        }
+        match self
+            .trail
+            .iter()
+            .take_while(|s| s.2 <= old)
+            .find(|s| same_way(s))
+        {
+            Some(s) => {
+                self.loop_from = s.2;
+                true
+            }
+            None => false,
+        }
     }
 }
 
@@ -609,10 +634,10 @@ impl BugController {
                         WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE)
                             .passing_gaps(vehicle.length, vehicle.width);
                     self.follower.engage();
-                    self.mode = Mode::Follow(Boundary {
+                    self.mode = Mode::Follow(Box::new(Boundary {
                         nearer_than,
                         ..Boundary::at_hit(p, goal_dist)
-                    });
+                    }));
                     return Decision::Drive(self.follower.command(&b, &pose, dt, radius));
                 }
                 let omega = (K_HEADING * heading).clamp(-TURN_RATE, TURN_RATE);
@@ -748,10 +773,16 @@ impl BugController {
                         // passed along the line, never entering the band from outside.
                         // A crossing inside a gap being passed is left from once through:
                         // the way out of the gap counts as the crossing.
-                        if on && goal_dist < bd.hit_goal_dist - CLOSER_BY
-                            || passing && bd.leave.is_some()
-                        {
+                        let closer = on && goal_dist < bd.hit_goal_dist - CLOSER_BY;
+                        if closer || passing && bd.leave.is_some() {
                             bd.leave = Some(bd.travelled);
+                        }
+                        if closer
+                            && goal_blocked
+                            && !bd.circled
+                            && bd.blocked_crossing.is_none_or(|c| goal_dist < c.1)
+                        {
+                            bd.blocked_crossing = Some((p, goal_dist, bd.travelled));
                         }
                         // Where the way toward the goal is blocked at the crossing (a corner
                         // of the next obstacle in the body's corridor), a little farther
@@ -760,7 +791,11 @@ impl BugController {
                         if let Some(at) = bd.leave
                             && !passing
                         {
-                            if !goal_blocked {
+                            // The way out of a gap may lie farther from the goal than the
+                            // crossing; leaving there must still be nearer than the hit
+                            // point, or the next hit point need not be nearer and Bug2 can
+                            // go round the same loop for ever.
+                            if !goal_blocked && goal_dist < bd.hit_goal_dist - CLOSER_BY / 2.0 {
                                 bd.leave = None;
                                 self.report.leave_points.push(p.to_array());
                                 self.mode = Mode::ToGoal;
@@ -770,12 +805,53 @@ impl BugController {
                                 bd.leave = None;
                             }
                         }
+                        // A loop round an obstacle that leaves the goal outside crossed
+                        // the m-line nearer the goal, where the line leaves the loop. If the
+                        // way was blocked at every such crossing, what blocked it lies
+                        // outside the loop: a neighbour the follower left out (a cluster's
+                        // gaps narrower than twice the standoff). Bug2 goes on round to the
+                        // crossing nearest the goal and leaves there to take the neighbour
+                        // up; the hit point that follows is nearer the goal, so this ends.
                         if looped {
-                            return self.no_path(
-                                "bug2: back at the hit point without a closer m-line crossing",
-                                p,
-                                vehicle,
-                            );
+                            let ring: Vec<DVec2> = (bd.trail.iter())
+                                .filter(|s| s.2 >= bd.loop_from)
+                                .map(|s| s.0)
+                                .collect();
+                            let beyond = beyond_boundary(&ring, goal, self.follower.side());
+                            match bd.blocked_crossing.filter(|c| c.2 >= bd.loop_from) {
+                                Some(c) if !beyond => {
+                                    bd.circled = true;
+                                    bd.closest = c;
+                                    bd.loop_len = bd.travelled - bd.loop_from;
+                                    bd.leave_at = bd.travelled + (c.2 - bd.loop_from);
+                                }
+                                _ => {
+                                    return self.no_path(
+                                        "bug2: back at the hit point without a closer m-line crossing",
+                                        p,
+                                        vehicle,
+                                    );
+                                }
+                            }
+                        }
+                        if bd.circled && !passing {
+                            let from = (p - bd.closest.0).length();
+                            // Leaving nearer the goal than the hit point by as much as the
+                            // crossing was is what makes each next hit point nearer.
+                            let there = from <= tol && bd.travelled >= bd.leave_at - 2.0 * tol
+                                || from <= 2.0 * tol && bd.travelled >= bd.leave_at;
+                            if there && goal_dist < bd.hit_goal_dist - CLOSER_BY {
+                                self.report.leave_points.push(p.to_array());
+                                self.mode = Mode::ToGoal;
+                                return Decision::Drive(DriveCommand::STOP);
+                            }
+                            if bd.travelled >= bd.leave_at + bd.loop_len / 2.0 {
+                                return self.no_path(
+                                    "bug2: the nearest blocked crossing was not met again within half a loop",
+                                    p,
+                                    vehicle,
+                                );
+                            }
                         }
                     }
                 }
