@@ -40,12 +40,18 @@ pub enum Guarded {
     Stop,
 }
 
-/// Distance from the robot-frame point `q` to a body of `length` × `width` m centred on the
-/// robot, m (0 inside it).
+/// Signed distance from the robot-frame point `q` to a body of `length` × `width` m centred
+/// on the robot, m: inside it, minus the distance to its nearest face. Signed, so that a
+/// return already inside the body (range noise, a remembered return a little off) still
+/// tells a move that goes deeper from one that backs out: with 0 for every point inside,
+/// a turn swinging a corner into a wall was as free as one swinging it away.
 fn body_distance(q: DVec2, length: f64, width: f64) -> f64 {
-    let dx = (q.x.abs() - length / 2.0).max(0.0);
-    let dy = (q.y.abs() - width / 2.0).max(0.0);
-    dx.hypot(dy)
+    let ex = q.x.abs() - length / 2.0;
+    let ey = q.y.abs() - width / 2.0;
+    if ex <= 0.0 && ey <= 0.0 {
+        return ex.max(ey);
+    }
+    ex.max(0.0).hypot(ey.max(0.0))
 }
 
 /// The body's clearance among `points` (robot frame) at `pose`: the distance of the
@@ -180,6 +186,24 @@ mod tests {
         .concat();
         assert_eq!(guard(&boxed, v, twist(0.24, 0.32)), Guarded::Stop);
         assert_eq!(guard(&boxed, v, twist(0.0, 0.8)), Guarded::Stop);
+    }
+
+    #[test]
+    fn a_wall_already_inside_the_body_still_stops_a_turn_that_goes_deeper() {
+        // A wall on the left beside the rear half, its returns 1 cm inside the body's side
+        // (range noise, or a remembered return a little off). A right turn on the spot
+        // swings the rear corner further in: it touches. A left turn swings it out, and
+        // backing or driving along the wall keeps it as deep: both free. With every return
+        // inside the body counted 0 m away, the right turn was free as well.
+        let wall = edge(
+            DVec2::new(-2.0, W / 2.0 - 0.01),
+            DVec2::new(-0.05, W / 2.0 - 0.01),
+        );
+        assert!(body_distance(DVec2::new(-0.2, W / 2.0 - 0.01), L, W) < 0.0);
+        assert!(sweep_touches(&wall, L, W, twist(0.0, -0.8)));
+        assert!(!sweep_touches(&wall, L, W, twist(0.0, 0.8)));
+        assert!(!sweep_touches(&wall, L, W, twist(-0.2, 0.0)));
+        assert!(!sweep_touches(&wall, L, W, twist(0.2, 0.0)));
     }
 
     #[test]
