@@ -329,8 +329,16 @@ impl Bumpers {
 /// Returns within this distance of the robot's centre are remembered, m: as far as a body
 /// backing off or turning on the spot can reach before the sensor sees there again.
 const MEMORY_RADIUS: f64 = 1.5;
-/// Remembered returns are forgotten after this long, s (odometry drifts).
-const MEMORY_TIME: f64 = 30.0;
+/// Remembered returns are forgotten after this long, s (odometry drifts, a gyro's bias
+/// even standing still)...
+const MEMORY_TIME: f64 = 120.0;
+/// ... or once the robot has moved this far since, m (turns count [`TURN_AS_PATH`]): drift
+/// grows with motion, and a robot shuffling in a narrow way for a minute still needs what
+/// it saw on its way in.
+const MEMORY_PATH: f64 = 6.0;
+/// Path equivalent of a turn for [`MEMORY_PATH`], m per radian: about how far a corner of
+/// the body moves.
+const TURN_AS_PATH: f64 = 0.35;
 /// Remembered returns are kept one per cell of this size, m.
 const MEMORY_CELL: f64 = 0.05;
 
@@ -347,8 +355,11 @@ pub struct BumperSensor {
     stamp: f64,
     bumpers: Option<Bumpers>,
     pose: PoseSource,
-    /// Remembered returns, believed frame, one per [`MEMORY_CELL`] cell: (point, time seen).
-    memory: BTreeMap<(i64, i64), (DVec2, f64)>,
+    /// Remembered returns, believed frame, one per [`MEMORY_CELL`] cell: (point, time seen,
+    /// `moved` when seen).
+    memory: BTreeMap<(i64, i64), (DVec2, f64, f64)>,
+    /// How far the robot has moved at the scans so far (turns count [`TURN_AS_PATH`]), m.
+    moved: f64,
     /// The believed robot pose when the latest scan was taken.
     scan_pose: Pose,
     /// The latest scan's clearance returns in the robot frame of that scan.
@@ -364,6 +375,7 @@ impl BumperSensor {
             bumpers: None,
             pose: PoseSource::Odometry,
             memory: BTreeMap::new(),
+            moved: 0.0,
             scan_pose: Pose::default(),
             scan_clearance: Vec::new(),
         }
@@ -418,8 +430,13 @@ impl BumperSensor {
                 c.band,
                 c.rule,
             );
+            let last = self.scan_pose;
             self.scan_pose = scan_pose(self.pose, input, i).unwrap_or(now);
             let pose = self.scan_pose;
+            if !self.memory.is_empty() {
+                self.moved += (pose.xy() - last.xy()).length()
+                    + TURN_AS_PATH * wrap_angle(pose.yaw - last.yaw).abs();
+            }
             self.remember(&mut b, scan, mount, &pose, input.time);
             self.scan_clearance = std::mem::take(&mut b.clearance);
             self.bumpers = Some(b);
@@ -449,9 +466,11 @@ impl BumperSensor {
         let to_robot = DVec2::from_angle(-pose.yaw);
         let to_world = DVec2::from_angle(pose.yaw);
         let at = pose.xy();
-        self.memory.retain(|_, (w, seen)| {
+        let moved = self.moved;
+        self.memory.retain(|_, (w, seen, seen_moved)| {
             let q = to_robot.rotate(*w - at);
-            let keep = now - *seen <= MEMORY_TIME && q.length() <= MEMORY_RADIUS && blind(q);
+            let fresh = now - *seen <= MEMORY_TIME && moved - *seen_moved <= MEMORY_PATH;
+            let keep = fresh && q.length() <= MEMORY_RADIUS && blind(q);
             if keep {
                 b.clearance.push(q);
             }
@@ -464,7 +483,7 @@ impl BumperSensor {
                     (w.x / MEMORY_CELL).floor() as i64,
                     (w.y / MEMORY_CELL).floor() as i64,
                 );
-                self.memory.insert(cell, (w, now));
+                self.memory.insert(cell, (w, now, moved));
             }
         }
     }
@@ -586,6 +605,31 @@ pub(crate) mod tests {
                 assert_ne!(b.toward(0.0), BumperState::Clear);
             }
             scan.stamp = 0.0;
+        }
+    }
+
+    #[test]
+    fn returns_behind_a_laser_are_forgotten_once_the_robot_has_moved_far_enough() {
+        use std::f64::consts::PI;
+        let mount = Pose::default();
+        let sense = |scan: &Scan| Bumpers::sense(scan, &mount, 8, 1.27, 0.5, BumperRule::All);
+        let seen = laser_scan(1080, |a| {
+            if a.cos() > 0.2 {
+                (1.0 / a.cos()) as f32
+            } else {
+                f32::INFINITY
+            }
+        });
+        let empty = laser_scan(1080, |_| f32::INFINITY);
+        let behind = Pose::new(0.0, 0.0, 0.0, PI);
+        for (moved, kept) in [(MEMORY_PATH - 0.5, true), (MEMORY_PATH + 0.5, false)] {
+            let mut sensor = BumperSensor::new(BumperConfig::default());
+            sensor.remember(&mut sense(&seen), &seen, &mount, &Pose::default(), 0.0);
+            // Long after (a robot shuffling in a narrow way), but having moved `moved`.
+            sensor.moved = moved;
+            let mut b = sense(&empty);
+            sensor.remember(&mut b, &empty, &mount, &behind, 0.9 * MEMORY_TIME);
+            assert_eq!(!b.clearance().is_empty(), kept, "moved {moved} m");
         }
     }
 
