@@ -452,6 +452,10 @@ impl Behaviour for BugController {
         self.bumpers.latest()
     }
 
+    fn touched(&mut self, input: &ControlInput<'_>, moving: (f64, f64)) {
+        self.bumpers.touched(input, moving);
+    }
+
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let mut d = self.next_decision(input, bumped);
         self.turned = matches!(d, Decision::Drive(c) if c.is_turn_on_the_spot());

@@ -339,6 +339,9 @@ const MEMORY_PATH: f64 = 6.0;
 /// Path equivalent of a turn for [`MEMORY_PATH`], m per radian: about how far a corner of
 /// the body moves.
 const TURN_AS_PATH: f64 = 0.35;
+/// How far outside the body a touch is remembered, m: within the guard's margin, so that
+/// moving along it stays free and moving into it does not.
+const CONTACT_OFFSET: f64 = 0.005;
 /// Remembered returns are kept one per cell of this size, m.
 const MEMORY_CELL: f64 = 0.05;
 
@@ -448,6 +451,45 @@ impl BumperSensor {
         b.clearance
             .extend(self.scan_clearance.iter().map(|&q| shift + turn.rotate(q)));
         Some(b)
+    }
+
+    /// Remembers where the body touched something while driving `(v, omega)`: points just
+    /// outside the face that led (the rear backing, the front driving on) or, turning on the
+    /// spot, the two corners that led, as a bumper strip would report. They stay where the
+    /// sensor is blind (a 270° laser's back), so the guard does not back into the same
+    /// unseen wall again; where it sees, the next scan replaces them.
+    pub fn touched(&mut self, input: &ControlInput<'_>, moving: (f64, f64)) {
+        let pose = nav_pose(self.pose, input);
+        self.touched_at(&pose, input.vehicle, moving, input.time);
+    }
+
+    /// [`BumperSensor::touched`] with the believed pose and the time given.
+    fn touched_at(&mut self, pose: &Pose, vehicle: &VehicleSpec, (v, omega): (f64, f64), now: f64) {
+        let (hl, hw) = (vehicle.length / 2.0, vehicle.width / 2.0);
+        let out = CONTACT_OFFSET;
+        let mut contact = Vec::new();
+        if v != 0.0 {
+            let x = v.signum() * (hl + out);
+            let n = (2.0 * hw / MEMORY_CELL).ceil() as usize;
+            contact.extend((0..=n).map(|k| DVec2::new(x, -hw + 2.0 * hw * k as f64 / n as f64)));
+        } else if omega != 0.0 {
+            // Turning left the front-left and rear-right corners lead, right the others;
+            // each a little out along the way it moved.
+            let s = omega.signum();
+            for c in [DVec2::new(hl, s * hw), DVec2::new(-hl, -s * hw)] {
+                let way = DVec2::new(-c.y, c.x) * s;
+                contact.push(c + way.normalize_or_zero() * out);
+            }
+        }
+        let to_world = DVec2::from_angle(pose.yaw);
+        for q in contact {
+            let w = pose.xy() + to_world.rotate(q);
+            let cell = (
+                (w.x / MEMORY_CELL).floor() as i64,
+                (w.y / MEMORY_CELL).floor() as i64,
+            );
+            self.memory.insert(cell, (w, now, self.moved));
+        }
     }
 
     /// Adds the remembered returns the sensor is blind to now to `b`'s clearance, then
@@ -606,6 +648,35 @@ pub(crate) mod tests {
             }
             scan.stamp = 0.0;
         }
+    }
+
+    #[test]
+    fn a_touch_while_backing_blind_is_kept_behind_the_rear_and_stops_backing_there() {
+        // A laser that saw nothing behind; the robot backs into something and touches it.
+        let v = crate::vehicle::vehicle("p3at").expect("p3at");
+        let mount = Pose::default();
+        let pose = Pose::new(2.0, 1.0, 0.0, 0.5);
+        let empty = laser_scan(1080, |_| f32::INFINITY);
+        let mut sensor = BumperSensor::new(BumperConfig::default());
+        sensor.touched_at(&pose, v, (-0.1, 0.0), 10.0);
+        let mut b = Bumpers::sense(&empty, &mount, 8, 1.27, 0.5, BumperRule::All);
+        sensor.remember(&mut b, &empty, &mount, &pose, 10.1);
+        let c = b.clearance();
+        assert!(!c.is_empty());
+        assert!(
+            c.iter()
+                .all(|q| q.x < -v.length / 2.0 && q.y.abs() <= v.width / 2.0 + 1e-9)
+        );
+        // The guard now refuses backing on, and lets the robot drive away.
+        use super::super::guard::{Guarded, guard};
+        use crate::vehicle::Twist;
+        let back = Twist {
+            v: -0.1,
+            omega: 0.0,
+        };
+        let ahead = Twist { v: 0.1, omega: 0.0 };
+        assert_eq!(guard(c, v, back), Guarded::Stop);
+        assert_eq!(guard(c, v, ahead), Guarded::Free);
     }
 
     #[test]

@@ -339,6 +339,10 @@ impl Behaviour for ExploreController {
         self.bumpers.latest()
     }
 
+    fn touched(&mut self, input: &ControlInput<'_>, moving: (f64, f64)) {
+        self.bumpers.touched(input, moving);
+    }
+
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
         let dt = 1.0 / self.rate_hz;
         if self.mission.strategy == Strategy::Frontier {

@@ -59,6 +59,9 @@ pub trait Behaviour {
     fn bumpers(&self) -> Option<&Bumpers> {
         None
     }
+    /// The body touched something while driving `(v, omega)`: what a real bumper strip
+    /// says, where the sensor saw nothing (behind a 270° laser). Default: nothing kept.
+    fn touched(&mut self, _input: &ControlInput<'_>, _moving: (f64, f64)) {}
 }
 
 /// A behaviour with the reflex of a real bumper: after a refused move, back away from what
@@ -118,6 +121,7 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
         } else if input.bumped && self.remaining == 0 {
             self.remaining = (RECOIL.0 * self.behaviour.rate_hz()).ceil() as u32;
             let (v, omega) = self.last;
+            self.behaviour.touched(input, self.last);
             // A turn on the spot that hit something is undone by turning back; a move by
             // moving the other way.
             self.recoil = if v == 0.0 && omega != 0.0 {
