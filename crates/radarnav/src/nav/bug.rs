@@ -222,22 +222,23 @@ struct Boundary {
     /// point (`None` before).
     away: Option<f64>,
     /// Bug1: closest point to the goal so far, its distance and the boundary distance
-    /// from the hit point at which it was met.
+    /// from the hit point at which it was met. Bug2, once circled: the blocked crossing it
+    /// goes back to.
     closest: (DVec2, f64, f64),
     /// Distance followed along this boundary, m.
     travelled: f64,
     /// Bug1: turn still to make on the spot to go back the other way, rad.
     about_turn: f64,
-    /// Bug1: the boundary distance at which the robot is back at the closest point, once
-    /// the loop is closed.
+    /// The boundary distance at which the robot is back at `closest`, once the loop is
+    /// closed.
     leave_at: f64,
-    /// Bug1: the loop is closed; heading for `closest`.
+    /// The loop is closed; heading for `closest`.
     circled: bool,
     /// Bug1: been away from `closest` since circling (it may be the hit point itself).
     away_from_closest: bool,
     /// Bug1: been within the loop tolerance of `closest` since circling.
     near_closest: bool,
-    /// Bug1: length of the closed loop, m.
+    /// Length of the closed loop, m.
     loop_len: f64,
     /// Bug1: the goal lies beyond the closed loop's boundary (inside the obstacle it went
     /// round, or outside the room it went round the inside of).
