@@ -56,7 +56,7 @@ fn body_distance(q: DVec2, length: f64, width: f64) -> f64 {
 
 /// The body's clearance among `points` (robot frame) at `pose`: the distance of the
 /// [`HITS_TO_BLOCK`]-th nearest of them to a body of `length` × `width` m there (one or two
-/// may be range noise), m.
+/// may be range noise), m; negative when that many lie inside it ([`body_distance`]).
 fn clearance(points: &[DVec2], pose: &Pose, length: f64, width: f64) -> f64 {
     let to_body = pose.inverse();
     let mut nearest = [f64::INFINITY; HITS_TO_BLOCK];
