@@ -178,14 +178,50 @@ impl Scan {
 /// The ray at azimuth `az` and elevation `el` (given as its sine and cosine, the same for a
 /// whole plane) from a sensor at `pose`, its origin shifted `lateral` metres to the ray's
 /// left, perpendicular to it in the scan plane.
-pub fn beam_ray(pose: &Pose, az: f64, (se, ce): (f64, f64), lateral: f64) -> Ray {
-    let heading = pose.yaw + az;
-    let (s, c) = heading.sin_cos();
+pub fn beam_ray(pose: &Pose, az: f64, el: (f64, f64), lateral: f64) -> Ray {
+    beam_ray_toward(pose, (pose.yaw + az).sin_cos(), el, lateral)
+}
+
+/// [`beam_ray`] for a ray whose world bearing has sine and cosine `(s, c)`.
+fn beam_ray_toward(pose: &Pose, (s, c): (f64, f64), (se, ce): (f64, f64), lateral: f64) -> Ray {
     let dir = DVec3::new(ce * c, ce * s, se);
     let left = DVec3::new(-s, c, 0.0);
     Ray {
         origin: pose.position() + left * lateral,
         dir,
+    }
+}
+
+/// The sines and cosines of a scan's azimuths relative to the sensor, kept from scan to scan
+/// (a sensor's azimuths do not change): a thesis-model scan turns them by its yaw with four
+/// products per ray instead of a sine and a cosine (DESIGN §11). The turned values differ
+/// from `sin_cos(yaw + az)` ([`beam_ray`]) by a few units in the last place, far below any
+/// range's rounding.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Bearings {
+    /// (first azimuth, increment, count) the table was made for, as bits.
+    key: (u64, u64, usize),
+    sin_cos: Vec<(f64, f64)>,
+    /// The last scan's world bearings.
+    turned: Vec<(f64, f64)>,
+}
+
+impl Bearings {
+    /// Sine and cosine of the world bearing of each of `n` azimuths `first + k * step` from a
+    /// sensor at heading `yaw`.
+    fn turned(&mut self, yaw: f64, first: f64, step: f64, n: usize) -> &[(f64, f64)] {
+        let key = (first.to_bits(), step.to_bits(), n);
+        if key != self.key || self.sin_cos.len() != n {
+            self.key = key;
+            self.sin_cos.clear();
+            self.sin_cos
+                .extend((0..n).map(|k| (first + k as f64 * step).sin_cos()));
+        }
+        let (sy, cy) = yaw.sin_cos();
+        self.turned.clear();
+        self.turned
+            .extend((self.sin_cos.iter()).map(|&(sa, ca)| (sy * ca + cy * sa, cy * ca - sy * sa)));
+        &self.turned
     }
 }
 
@@ -325,10 +361,13 @@ impl SensorConfig {
         let fan_ref = fan_ok.then_some(&fan);
         // Ray `i` is azimuth `k` of plane `plane` (the serial loop below counts them rather
         // than divide per ray).
+        let mut bearings = std::mem::take(&mut tracer.bearings);
+        let toward = bearings.turned(pose.yaw, out.angle_min, out.angle_increment, azimuths);
         let trace = |tracer: &mut Tracer, i: usize, plane: usize, k: usize| {
             let az = out.angle_min + k as f64 * out.angle_increment;
             let el = plane_sin_cos[plane];
-            let ray = beam_ray(pose, az, el, draws[i].0.side() * out.side_beam_offset);
+            let lateral = draws[i].0.side() * out.side_beam_offset;
+            let ray = beam_ray_toward(pose, toward[k], el, lateral);
             if let Some(&e) = optical.get(i) {
                 let fan = fan_ref.map(|f| (f, pose.yaw + az));
                 let (budget, max) = (self.penetration_db, self.range_max);
@@ -363,6 +402,7 @@ impl SensorConfig {
             returns
         };
         tracer.fan = fan;
+        tracer.bearings = bearings;
         for (ret, (beam, noise)) in returns.iter().zip(draws) {
             out.ranges
                 .push(self.reported_range(ret.range, *noise) as f32);
@@ -417,6 +457,25 @@ mod tests {
     use crate::world::{MaterialTable, Object, Shape};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
+
+    /// The turned azimuth table agrees with the sine and cosine of each bearing to a few
+    /// units in the last place, for any heading, and is remade when the azimuths change.
+    #[test]
+    fn turned_bearings_are_the_bearings_sines_and_cosines() {
+        let mut b = Bearings::default();
+        for (first, step, n) in [(-2.356, 0.25f64.to_radians(), 1081), (0.0, 0.0175, 360)] {
+            for yaw in [0.0, 0.3, -2.9, 7.5, 1e3] {
+                let turned = b.turned(yaw, first, step, n).to_vec();
+                assert_eq!(turned.len(), n);
+                for (k, (s, c)) in turned.into_iter().enumerate() {
+                    let (s0, c0) = (yaw + first + k as f64 * step).sin_cos();
+                    // The sum yaw + az itself rounds by up to half an ulp of its size.
+                    let tol = 4.0 * f64::EPSILON * (1.0 + yaw.abs());
+                    assert!((s - s0).abs() <= tol && (c - c0).abs() <= tol, "{yaw} {k}");
+                }
+            }
+        }
+    }
 
     /// A closed 10 × 10 m concrete room centred on the origin; inner faces at ±4.9 m.
     fn square_room() -> World {

@@ -76,6 +76,8 @@ pub struct Tracer {
     pub(crate) beam_echoes: Vec<super::echo::Echo>,
     /// Per beam ray, where its echoes start in `beam_echoes` and its first incidence cosine.
     pub(crate) beam_spans: Vec<(usize, f64)>,
+    /// The world bearings of the scan being traced, with its sensor's azimuth table.
+    pub(crate) bearings: super::Bearings,
 }
 
 impl Tracer {

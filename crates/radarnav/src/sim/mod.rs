@@ -30,7 +30,7 @@ use thiserror::Error;
 
 use crate::pose::Pose;
 use crate::scenario::{MountedSensor, Robot, Scenario};
-use crate::sensor::{PARALLEL_MIN_RAYS, Scan, Tracer, with_pool_tracer};
+use crate::sensor::{PARALLEL_MIN_RAYS, Scan, ScanDraws, Tracer, with_pool_tracer};
 use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
 use crate::world::World;
 
@@ -232,6 +232,10 @@ pub struct Simulation<'a> {
     odometry: Odometry,
     odo_rng: ChaCha8Rng,
     sensor_rngs: Vec<ChaCha8Rng>,
+    /// Per sensor, the draws of its next scans taken ahead of time from its RNG, in stream
+    /// order. A scan's draws do not depend on its pose, so they are drawn while other scans
+    /// are traced ([`Simulation::prepare_scans`]) rather than in the serial part of a step.
+    drawn: Vec<VecDeque<ScanDraws>>,
     tracer: Tracer,
     next_scan: Vec<u64>,
     /// Per sensor, its next scans traced ahead (see the module doc).
@@ -310,6 +314,7 @@ impl<'a> Simulation<'a> {
             odometry: Odometry::new(start, robot.odometry),
             odo_rng: stream(0),
             sensor_rngs: (1..=n as u64).map(stream).collect(),
+            drawn: vec![VecDeque::new(); n],
             tracer: Tracer::default(),
             next_scan: vec![0; n],
             prepared: vec![VecDeque::new(); n],
@@ -487,13 +492,20 @@ impl<'a> Simulation<'a> {
                     debug_assert!(scan.stamp == when && scan.pose == truth.compose(&sensor.mount));
                     scan
                 }
-                None => sensor.config.scan(
-                    self.world,
-                    &truth.compose(&sensor.mount),
-                    when,
-                    &mut self.sensor_rngs[i],
-                    &mut self.tracer,
-                ),
+                None => {
+                    let draws = self.drawn[i].pop_front().unwrap_or_else(|| {
+                        sensor.config.draw(self.world, &mut self.sensor_rngs[i])
+                    });
+                    let pose = truth.compose(&sensor.mount);
+                    (sensor.config).trace_scan(
+                        self.world,
+                        &pose,
+                        when,
+                        &draws,
+                        &mut self.tracer,
+                        PARALLEL_MIN_RAYS,
+                    )
+                }
             };
             self.next_scan[i] += 1;
             observer.on_scan(&ScanEvent {
@@ -558,23 +570,42 @@ impl<'a> Simulation<'a> {
         if jobs.len() < 2 || rays < LOOKAHEAD_MIN_RAYS {
             return;
         }
-        let draws: Vec<_> = jobs
+        let (world, drawn, rngs) = (self.world, &mut self.drawn, &mut self.sensor_rngs);
+        let draws: Vec<ScanDraws> = jobs
             .iter()
-            .map(|&(i, _, _)| sensors[i].config.draw(self.world, &mut self.sensor_rngs[i]))
-            .collect();
-        let world = self.world;
-        let scans: Vec<Scan> = jobs
-            .par_iter()
-            .zip(&draws)
-            .map(|(&(i, when, truth), draws)| {
-                let s = &sensors[i];
-                let pose = truth.compose(&s.mount);
-                with_pool_tracer(|tracer| {
-                    s.config
-                        .trace_scan(world, &pose, when, draws, tracer, PARALLEL_MIN_RAYS)
-                })
+            .map(|&(i, _, _)| {
+                (drawn[i].pop_front())
+                    .unwrap_or_else(|| sensors[i].config.draw(world, &mut rngs[i]))
             })
             .collect();
+        // While the batch is traced, the next batch's draws are taken (as many per sensor as
+        // this batch used): the draws are the same whenever they are taken, as each sensor's
+        // stream is read in scan order.
+        let mut per_sensor = vec![0usize; sensors.len()];
+        for &(i, _, _) in &jobs {
+            per_sensor[i] += 1;
+        }
+        let refill = || {
+            for (i, want) in per_sensor.iter().enumerate() {
+                while drawn[i].len() < *want {
+                    drawn[i].push_back(sensors[i].config.draw(world, &mut rngs[i]));
+                }
+            }
+        };
+        let trace = || -> Vec<Scan> {
+            jobs.par_iter()
+                .zip(&draws)
+                .map(|(&(i, when, truth), draws)| {
+                    let s = &sensors[i];
+                    let pose = truth.compose(&s.mount);
+                    with_pool_tracer(|tracer| {
+                        s.config
+                            .trace_scan(world, &pose, when, draws, tracer, PARALLEL_MIN_RAYS)
+                    })
+                })
+                .collect()
+        };
+        let (scans, ()) = rayon::join(trace, refill);
         for (&(i, _, _), scan) in jobs.iter().zip(scans) {
             self.prepared[i].push_back(scan);
         }
