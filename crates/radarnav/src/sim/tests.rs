@@ -81,6 +81,8 @@ struct Log {
     /// (truth, odometry) of the robot at each scan.
     odometry: Vec<(Pose, Pose)>,
     steps: Vec<Step>,
+    /// Every scan, whole, with its sensor.
+    taken: Vec<(usize, Scan)>,
 }
 
 impl Observer for Log {
@@ -88,6 +90,7 @@ impl Observer for Log {
     fn on_scan(&mut self, e: &ScanEvent<'_>) -> Result<(), Self::Error> {
         self.scans.push((e.sensor, e.scan.stamp, e.scan.pose));
         self.odometry.push((e.truth, e.odometry));
+        self.taken.push((e.sensor, e.scan.clone()));
         Ok(())
     }
     fn on_step(&mut self, s: &Step) -> Result<(), Self::Error> {
@@ -315,20 +318,12 @@ proptest! {
 /// its own random stream read in scan order.
 #[test]
 fn scans_traced_ahead_are_the_scans_taken_one_by_one() {
-    struct Scans(Vec<(usize, Scan)>);
-    impl Observer for Scans {
-        type Error = std::convert::Infallible;
-        fn on_scan(&mut self, e: &ScanEvent<'_>) -> Result<(), Self::Error> {
-            self.0.push((e.sensor, e.scan.clone()));
-            Ok(())
-        }
-    }
     let s = room();
     let robot = &s.robots[0];
     let run = settings(&s, 6.0);
     let controller = teleop(&[(2.0, 0.4, 0.0), (2.0, 0.2, 0.6), (2.0, 0.0, -0.5)]);
     let mut sim = Simulation::new(&s.world, robot, controller, run).unwrap();
-    let mut log = Scans(Vec::new());
+    let mut log = Log::default();
     sim.run(&mut log).unwrap();
     let mut rngs: Vec<ChaCha8Rng> = (1..=robot.sensors.len() as u64)
         .map(|k| {
@@ -338,8 +333,8 @@ fn scans_traced_ahead_are_the_scans_taken_one_by_one() {
         })
         .collect();
     let mut tracer = Tracer::default();
-    assert!(log.0.len() > 200, "{} scans", log.0.len());
-    for (k, (i, scan)) in log.0.iter().enumerate() {
+    assert!(log.taken.len() > 200, "{} scans", log.taken.len());
+    for (k, (i, scan)) in log.taken.iter().enumerate() {
         let config = &robot.sensors[*i].config;
         let alone = config.scan(&s.world, &scan.pose, scan.stamp, &mut rngs[*i], &mut tracer);
         assert!(alone == *scan, "scan {k} of sensor {i} at {} s", scan.stamp);
