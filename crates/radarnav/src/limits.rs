@@ -129,6 +129,8 @@ limits! {
     EXTINCTION = "laser_extinction_per_m" in "material": 0.0, 100.0, "1/m", "mean free path 1 cm";
     /// Specular lobe width.
     LOBE = "specular_lobe_deg" in "material": 0.1, 90.0, "deg", "";
+    /// Diffuse share of a specular echo.
+    DIFFUSE = "radar_diffuse" in "material": 0.0, 1.0, "", "share of a specular echo scattered at any angle";
     /// Odometry speed noise.
     SPEED_NOISE = "speed_noise" in "robot.odometry": 0.0, 1.0, "", "relative standard deviation";
     /// Odometry yaw drift and noise.

@@ -366,6 +366,11 @@ fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, Scen
                 .map(|v| v.0.to_radians())
                 .or(base.as_ref().map(|b| b.specular_lobe))
                 .unwrap_or(DEFAULT_SPECULAR_LOBE_DEG.to_radians()),
+            radar_diffuse: m
+                .radar_diffuse
+                .map(|v| v.0)
+                .or(base.as_ref().map(|b| b.radar_diffuse))
+                .unwrap_or(0.0),
             laser_opaque,
             // An opaque base stores an infinite laser attenuation; a variant made see-through
             // must not inherit it, or `laser_opaque = false` would change nothing.

@@ -47,6 +47,8 @@ checked_f64! {
     Extinction: limits::EXTINCTION;
     /// A lobe width in degrees.
     LobeDeg: limits::LOBE;
+    /// A diffuse share of a specular echo.
+    Diffuse: limits::DIFFUSE;
     /// Relative odometry speed noise.
     SpeedNoise: limits::SPEED_NOISE;
     /// Odometry yaw drift or noise, degrees/s.
@@ -319,6 +321,8 @@ pub struct MaterialSpec {
     pub radar_backscatter_per_m: Option<Backscatter>,
     /// Full width of a specular echo lobe, degrees (0.1–90).
     pub specular_lobe_deg: Option<LobeDeg>,
+    /// Share of a specular echo scattered diffusely (0–1).
+    pub radar_diffuse: Option<Diffuse>,
     /// Stops a laser at its surface.
     pub laser_opaque: Option<bool>,
     /// Laser dB/m when not opaque (default for an aerosol: 4.343 × its extinction).

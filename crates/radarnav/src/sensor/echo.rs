@@ -356,10 +356,18 @@ fn surface_echo(
     if rho <= 0.0 {
         return (cos, None);
     }
+    // A specular surface's echo: its lobe around the normal, plus the diffuse share's echo at
+    // any angle (with no diffuse share, exactly the lobe).
+    let diffuse = if m.specular { m.radar_diffuse } else { 1.0 };
     let gain = if m.specular {
         let theta = cos.acos();
         let x = theta / m.specular_lobe;
-        (-4.0 * std::f64::consts::LN_2 * x * x).exp()
+        let lobe = (-4.0 * std::f64::consts::LN_2 * x * x).exp();
+        if diffuse > 0.0 {
+            (1.0 - diffuse) * lobe + diffuse * cos
+        } else {
+            lobe
+        }
     } else {
         cos
     };
@@ -386,7 +394,13 @@ fn surface_echo(
                 dir,
             },
             path: range,
-            loss_db: loss - to_db(rho),
+            // What the diffuse share scatters is not mirrored.
+            loss_db: loss
+                - to_db(if diffuse > 0.0 {
+                    rho * (1.0 - diffuse)
+                } else {
+                    rho
+                }),
             bounces: leg.bounces + 1,
             t_max: leg.t_max - t,
         }
@@ -443,7 +457,7 @@ pub fn power_linear(e: &Echo) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::Shape;
+    use crate::world::{METAL_DIFFUSE, Material, Shape};
 
     use crate::world::strategies::world_of as world;
 
@@ -612,7 +626,16 @@ mod tests {
         .unwrap();
         let wall =
             Shape::cuboid(DVec3::new(5.0, 6.1, 1.0), DVec3::new(40.0, 0.2, 2.0), 0.0).unwrap();
-        let w = world(&[(mirror, "metal"), (wall, "concrete")]);
+        // A perfect mirror: built-in metal without its diffuse share.
+        let mut w = world(&[(mirror.clone(), "metal"), (wall.clone(), "concrete")]);
+        let mut table = w.materials().clone();
+        let metal = table.id("metal").unwrap();
+        let smooth = Material {
+            radar_diffuse: 0.0,
+            ..table.get(metal).clone()
+        };
+        table.insert(smooth);
+        w = World::new(table, w.objects().to_vec());
         let e = echoes_of(&w, &x_ray(), &model(RangeLaw::R2));
         let ghost = e.iter().find(|e| e.bounces == 1).expect("a ghost echo");
         // The mirror's face is 0.05·√2 before its centre line along x.
@@ -622,5 +645,22 @@ mod tests {
         assert_eq!(ghost.material, w.materials().id("concrete").unwrap());
         // At 45° a 10° lobe returns nothing above the floor directly.
         assert!(e.iter().all(|e| e.bounces == 1), "{e:?}");
+
+        // Built-in metal scatters its diffuse share at any angle: a direct echo of
+        // d·cos 45° (its lobe adds nothing at 45°) at the face, and a ghost weaker by (1 − d)², mirrored twice.
+        let rough = world(&[(mirror, "metal"), (wall, "concrete")]);
+        let f = echoes_of(&rough, &x_ray(), &model(RangeLaw::R2));
+        let direct = f.iter().find(|e| e.bounces == 0).expect("a direct echo");
+        assert!((direct.range - hit).abs() < 1e-9, "{f:?}");
+        let expect = to_db(METAL_DIFFUSE * 0.5f64.sqrt() / (hit * hit));
+        assert!((direct.power_db - expect).abs() < 1e-9, "{f:?}");
+        let rough_ghost = f.iter().find(|e| e.bounces == 1).expect("a ghost echo");
+        assert_eq!(rough_ghost.range, ghost.range);
+        let weaker = ghost.power_db - rough_ghost.power_db;
+        // Mirrored on the way out and on the way back.
+        assert!(
+            (weaker + 2.0 * to_db(1.0 - METAL_DIFFUSE)).abs() < 1e-9,
+            "{weaker}"
+        );
     }
 }

@@ -18,8 +18,10 @@
 //!
 //! The echo model (DESIGN §7.2) adds, per material, a reflectivity ρ (power fraction returned
 //! at entry, normal incidence), a volume backscatter coefficient η (power fraction scattered
-//! back per metre inside), and the width of a specular material's lobe. The thesis model uses
-//! none of them.
+//! back per metre inside), the width of a specular material's lobe and the share of its echo
+//! scattered diffusely (`radar_diffuse`: a specular surface's echo is (1 − d) of its lobe
+//! plus d × the incidence cosine; what it mirrors on is (1 − d) ρ). The thesis model uses none
+//! of them.
 //!
 //! Aerosols (DESIGN §7.6): a material that is not laser-opaque and has a laser extinction
 //! coefficient k > 0 (`laser_extinction_per_m`) scatters a laser ray back from its particles:
@@ -31,7 +33,7 @@
 //! | material | ρ | η (1/m) | specular lobe | source |
 //! |---|---|---|---|---|
 //! | `concrete` | 0.35 | 0 | diffuse | rough value of 60–77 GHz reflection measurements of concrete walls (power reflection ≈ 0.3–0.4) |
-//! | `metal` | 1.0 | 0 | 10° | a conductor reflects all; the lobe width is chosen |
+//! | `metal` | 1.0 | 0 | 10°, 1 % diffuse | a conductor reflects all; the lobe width and the diffuse share ([`METAL_DIFFUSE`]) are chosen |
 //! | `wood` | 0.2 | 0 | diffuse | rough value of mm-wave measurements of wooden boards |
 //! | `glass` | 0.25 | 0 | 10° | ≈ 25 % power reflection of a pane at 60–77 GHz; lobe chosen |
 //! | `foliage_light` | 0.1 | 0.1 | diffuse | ρ chosen (leaves are a weak, diffuse surface); η chosen so that a metre of hedge glows about as bright as its surface |
@@ -77,6 +79,10 @@ pub struct Material {
     pub radar_backscatter_per_m: f64,
     /// Full width (−3 dB) of a specular material's echo lobe around normal incidence, radians.
     pub specular_lobe: f64,
+    /// Share of a specular material's reflected power scattered diffusely (as a rough
+    /// surface's, ∝ the incidence cosine) rather than mirrored: what lets a radar see a metal
+    /// crate's side at any angle and not only its ghost. 0–1; diffuse materials ignore it.
+    pub radar_diffuse: f64,
     /// Whether a laser ray stops at its surface.
     pub laser_opaque: bool,
     /// Laser loss inside when not opaque, dB/m.
@@ -130,6 +136,7 @@ fn builtin(
         specular,
         radar_backscatter_per_m: 0.0,
         specular_lobe: DEFAULT_SPECULAR_LOBE_DEG.to_radians(),
+        radar_diffuse: 0.0,
         laser_opaque: laser.is_none(),
         laser_attenuation_db_per_m: laser.unwrap_or(f64::INFINITY),
         laser_extinction_per_m: 0.0,
@@ -144,10 +151,19 @@ pub const DB_PER_UNIT_EXTINCTION: f64 = 10.0 * std::f64::consts::LOG10_E;
 /// Default full width of a specular echo lobe, degrees (chosen: a smooth wall or pane).
 pub const DEFAULT_SPECULAR_LOBE_DEG: f64 = 10.0;
 
+/// The diffuse share of the built-in `metal` (chosen): painted, dented or riveted faces (crates,
+/// cabinets, posts) return about 1 % of their echo at any angle. A perfect mirror would hide a
+/// crate's side from a radar at more than about 20° off its normal (only its ghost beyond).
+pub const METAL_DIFFUSE: f64 = 0.01;
+
 /// The built-in materials, in a fixed order (their ids in a fresh table).
 pub fn builtin_materials() -> Vec<Material> {
     let backscatter = |m: Material, eta: f64| Material {
         radar_backscatter_per_m: eta,
+        ..m
+    };
+    let rough = |m: Material, diffuse: f64| Material {
+        radar_diffuse: diffuse,
         ..m
     };
     let aerosol = |m: Material, k: f64| Material {
@@ -157,7 +173,10 @@ pub fn builtin_materials() -> Vec<Material> {
     let inf = f64::INFINITY;
     vec![
         builtin("concrete", inf, 0.35, false, None, false, [150, 150, 150]),
-        builtin("metal", inf, 1.0, true, None, false, [90, 110, 140]),
+        rough(
+            builtin("metal", inf, 1.0, true, None, false, [90, 110, 140]),
+            METAL_DIFFUSE,
+        ),
         builtin("wood", inf, 0.2, false, None, false, [160, 110, 60]),
         builtin(
             "glass",

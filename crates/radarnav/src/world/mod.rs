@@ -11,8 +11,8 @@ pub mod shape;
 
 pub use fan::Fan;
 pub use material::{
-    Band, DB_PER_UNIT_EXTINCTION, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialId, MaterialTable,
-    builtin_materials,
+    Band, DB_PER_UNIT_EXTINCTION, DEFAULT_SPECULAR_LOBE_DEG, METAL_DIFFUSE, Material, MaterialId,
+    MaterialTable, builtin_materials,
 };
 pub use shape::{OrientedBox, Ray, Shape, ShapeError};
 
