@@ -287,6 +287,63 @@ mod tests {
         (s, "concrete")
     }
 
+    /// A first-echo radar beside a metal crate sees the crate's side where its rays graze it
+    /// (60–75° off the normal, far outside the mirror lobe) through the metal's diffuse share;
+    /// a perfect mirror there reports only what its ghost leg meets, metres beyond.
+    #[test]
+    fn a_first_echo_radar_sees_a_metal_crates_side_at_grazing_incidence() {
+        // The crate's near face is the line y = 0.3 from x = 0.4 to 2.4; a wall at x = 6.
+        let crate_box = Shape::cuboid(
+            glam::DVec3::new(1.4, 0.8, 0.5),
+            glam::DVec3::new(2.0, 1.0, 1.0),
+            0.0,
+        )
+        .unwrap();
+        let wall = Shape::cuboid(
+            glam::DVec3::new(6.1, 0.0, 1.0),
+            glam::DVec3::new(0.2, 40.0, 2.0),
+            0.0,
+        )
+        .unwrap();
+        let rough = world_of(&[(crate_box, "metal"), (wall, "concrete")]);
+        let mut table = rough.materials().clone();
+        let metal = table.id("metal").unwrap();
+        table.insert(crate::world::Material {
+            radar_diffuse: 0.0,
+            ..table.get(metal).clone()
+        });
+        let mirror = World::new(table, rough.objects().to_vec());
+        let mut c = preset("radar_thesis").expect("preset");
+        c.signal.return_mode = ReturnMode::First;
+        let pose = Pose::new(0.0, 0.0, 0.4, 0.0);
+        let take = |w: &World| {
+            let mut rng = ChaCha8Rng::seed_from_u64(1);
+            c.scan(w, &pose, 0.0, &mut rng, &mut Tracer::default())
+        };
+        let (seen, ghosted) = (take(&rough), take(&mirror));
+        let mut grazing = 0;
+        for i in 0..seen.len() {
+            let (az, _) = seen.angles(i);
+            let deg = az.to_degrees();
+            if !(15.0..=30.0).contains(&deg) {
+                continue;
+            }
+            grazing += 1;
+            let face = 0.3 / az.sin();
+            assert!(
+                (f64::from(seen.ranges[i]) - face).abs() < 1e-4,
+                "{deg}°: {}",
+                seen.ranges[i]
+            );
+            assert!(
+                f64::from(ghosted.ranges[i]) > face + 1.0,
+                "{deg}°: {}",
+                ghosted.ranges[i]
+            );
+        }
+        assert!(grazing >= 15, "{grazing} rays");
+    }
+
     /// The thesis' side beams are the three-ray beam of §7.1 (in the scan plane, equal
     /// weights, one drawn): in a world of solids, where the thesis range is the first
     /// surface, `first` returns with uniform selection pick the same side beam from the same
