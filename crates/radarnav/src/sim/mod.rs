@@ -12,7 +12,8 @@
 //! Scan `k` of a sensor with rate `r` is taken at exactly `k / r` seconds, whatever `dt` is.
 //! Between two controller calls the command is fixed, so every scan until the next call has a
 //! known pose: at each call the loop traces that batch on all cores and hands the scans out
-//! in order as the steps reach them (same draws, same scans as one by one).
+//! in order as the steps reach them (same draws, same scans as one by one). A scan's draws do
+//! not depend on its pose, so the next batch's are taken while a batch is traced.
 //! Every random draw comes from ChaCha8 streams of the run's seed: stream 0 for the odometry,
 //! stream `1 + i` for sensor `i`, so the same scenario and seed give the same run.
 
@@ -257,6 +258,8 @@ pub struct Simulation<'a> {
 const LOOKAHEAD_SCANS: usize = 64;
 /// Fewest rays in a batch worth sharing among threads.
 const LOOKAHEAD_MIN_RAYS: usize = 1024;
+/// Most rays per sensor whose draws are taken ahead of their scans (about 16 MB of draws).
+const DRAWN_MAX_RAYS: usize = 1 << 20;
 
 /// Bumps kept with time and object in the summary; later ones are only counted.
 pub const MAX_BUMP_EVENTS: usize = 1000;
@@ -584,6 +587,11 @@ impl<'a> Simulation<'a> {
         let mut per_sensor = vec![0usize; sensors.len()];
         for &(i, _, _) in &jobs {
             per_sensor[i] += 1;
+        }
+        // Draws held ahead stay small beside the scans themselves: at least one scan's.
+        for (want, s) in per_sensor.iter_mut().zip(sensors) {
+            let rays = (s.config.azimuth_count() * s.config.elevations.len()).max(1);
+            *want = (*want).min((DRAWN_MAX_RAYS / rays).max(1));
         }
         let refill = || {
             for (i, want) in per_sensor.iter().enumerate() {
