@@ -357,17 +357,13 @@ fn surface_echo(
         return (cos, None);
     }
     // A specular surface's echo: its lobe around the normal, plus the diffuse share's echo at
-    // any angle (with no diffuse share, exactly the lobe).
-    let diffuse = if m.specular { m.radar_diffuse } else { 1.0 };
+    // any angle (with no diffuse share exactly the lobe: 1·x + 0 = x).
+    let diffuse = m.radar_diffuse;
     let gain = if m.specular {
         let theta = cos.acos();
         let x = theta / m.specular_lobe;
         let lobe = (-4.0 * std::f64::consts::LN_2 * x * x).exp();
-        if diffuse > 0.0 {
-            (1.0 - diffuse) * lobe + diffuse * cos
-        } else {
-            lobe
-        }
+        (1.0 - diffuse) * lobe + diffuse * cos
     } else {
         cos
     };
@@ -395,12 +391,7 @@ fn surface_echo(
             },
             path: range,
             // What the diffuse share scatters is not mirrored.
-            loss_db: loss
-                - to_db(if diffuse > 0.0 {
-                    rho * (1.0 - diffuse)
-                } else {
-                    rho
-                }),
+            loss_db: loss - to_db(rho * (1.0 - diffuse)),
             bounces: leg.bounces + 1,
             t_max: leg.t_max - t,
         }

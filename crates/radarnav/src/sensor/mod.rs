@@ -196,31 +196,46 @@ fn beam_ray_toward(pose: &Pose, (s, c): (f64, f64), (se, ce): (f64, f64), latera
 /// (a sensor's azimuths do not change): a thesis-model scan turns them by its yaw with four
 /// products per ray instead of a sine and a cosine (DESIGN §11). The turned values differ
 /// from `sin_cos(yaw + az)` ([`beam_ray`]) by a few units in the last place, far below any
-/// range's rounding.
+/// range's rounding. A tracer serves every sensor of a run in turn (a radar and a laser
+/// alternate), so it keeps one table per azimuth layout.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Bearings {
-    /// (first azimuth, increment, count) the table was made for, as bits.
-    key: (u64, u64, usize),
-    sin_cos: Vec<(f64, f64)>,
+    /// Per layout, its sines and cosines.
+    tables: Vec<(AzimuthLayout, Vec<(f64, f64)>)>,
     /// The last scan's world bearings.
     turned: Vec<(f64, f64)>,
 }
+
+/// A scan's azimuths: first, increment (as bits) and count.
+type AzimuthLayout = (u64, u64, usize);
+
+/// Azimuth layouts a tracer keeps tables for; more are dropped and remade (a robot has a few
+/// sensors).
+const BEARING_TABLES: usize = 8;
 
 impl Bearings {
     /// Sine and cosine of the world bearing of each of `n` azimuths `first + k * step` from a
     /// sensor at heading `yaw`.
     fn turned(&mut self, yaw: f64, first: f64, step: f64, n: usize) -> &[(f64, f64)] {
         let key = (first.to_bits(), step.to_bits(), n);
-        if key != self.key || self.sin_cos.len() != n {
-            self.key = key;
-            self.sin_cos.clear();
-            self.sin_cos
-                .extend((0..n).map(|k| (first + k as f64 * step).sin_cos()));
-        }
+        let k = match self.tables.iter().position(|t| t.0 == key) {
+            Some(k) => k,
+            None => {
+                if self.tables.len() >= BEARING_TABLES {
+                    self.tables.clear();
+                }
+                let table = (0..n)
+                    .map(|k| (first + k as f64 * step).sin_cos())
+                    .collect();
+                self.tables.push((key, table));
+                self.tables.len() - 1
+            }
+        };
         let (sy, cy) = yaw.sin_cos();
         self.turned.clear();
-        self.turned
-            .extend((self.sin_cos.iter()).map(|&(sa, ca)| (sy * ca + cy * sa, cy * ca - sy * sa)));
+        self.turned.extend(
+            (self.tables[k].1.iter()).map(|&(sa, ca)| (sy * ca + cy * sa, cy * ca - sy * sa)),
+        );
         &self.turned
     }
 }
@@ -459,12 +474,13 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     /// The turned azimuth table agrees with the sine and cosine of each bearing to a few
-    /// units in the last place, for any heading, and is remade when the azimuths change.
+    /// units in the last place, for any heading, and each sensor's layout keeps its table.
     #[test]
     fn turned_bearings_are_the_bearings_sines_and_cosines() {
         let mut b = Bearings::default();
-        for (first, step, n) in [(-2.356, 0.25f64.to_radians(), 1081), (0.0, 0.0175, 360)] {
-            for yaw in [0.0, 0.3, -2.9, 7.5, 1e3] {
+        // A laser's and a radar's scans in turn, as one tracer serves them in a run.
+        for yaw in [0.0, 0.3, -2.9, 7.5, 1e3] {
+            for (first, step, n) in [(-2.356, 0.25f64.to_radians(), 1081), (0.0, 0.0175, 360)] {
                 let turned = b.turned(yaw, first, step, n).to_vec();
                 assert_eq!(turned.len(), n);
                 for (k, (s, c)) in turned.into_iter().enumerate() {
@@ -475,6 +491,8 @@ mod tests {
                 }
             }
         }
+        // Each layout's table was made once and kept.
+        assert_eq!(b.tables.len(), 2);
     }
 
     /// A closed 10 × 10 m concrete room centred on the origin; inner faces at ±4.9 m.
