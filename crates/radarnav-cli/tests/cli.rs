@@ -160,6 +160,14 @@ fn run_a_bug_mission_reports_its_navigation() {
     assert!(retries >= 1, "{nav}");
     assert_eq!(nav["hit_points"].as_array().unwrap().len(), 1 + retries);
     assert!(nav["safety"].as_f64().unwrap() < 1.27, "{nav}");
+    // The last retry keeps the floor standoff and follows the other side; the ones before
+    // keep the mission's side.
+    let r = nav["retries"].as_array().unwrap();
+    let follow = |i: usize| r[i]["follow"].as_str().unwrap();
+    assert!(retries >= 2, "{nav}");
+    assert!((0..retries - 1).all(|i| follow(i) == follow(0)), "{nav}");
+    assert_ne!(follow(retries - 1), follow(0), "{nav}");
+    assert_eq!(r[retries - 1]["safety"], r[retries - 2]["safety"], "{nav}");
     assert!(nav["boundary_distance"].as_f64().unwrap() > 20.0, "{nav}");
 }
 

@@ -138,6 +138,45 @@ fn both_bugs_reach_the_goal_behind_the_foliage_hedge_with_the_radar() {
     }
 }
 
+#[test]
+fn a_bug_in_a_dead_end_narrower_than_its_turning_circle_drives_out_to_turn() {
+    // A way 0.7 m wide (the body is 0.50 m wide, its turning circle 0.80 m) from x = 4 to 7,
+    // closed at its west end; the robot stands in it facing east, the goal lies west beyond
+    // the closed end. It cannot turn where it stands: it drives out of the way's open end to
+    // where the turn is clear, and goes round. Standing still there, it was stuck until the
+    // watchdog fired, at every standoff.
+    let block = |name: &str, a: (f64, f64), b: (f64, f64)| {
+        format!(
+            "[[object]]\nname = \"{name}\"\nmaterial = \"concrete\"\n\
+             wall = {{ points = [[{}, {}], [{}, {}]], thickness = 0.1, height = 1.0 }}\n",
+            a.0, a.1, b.0, b.1
+        )
+    };
+    let objects = [
+        block("south", (4.0, 3.6), (7.0, 3.6)),
+        block("north", (4.0, 4.4), (7.0, 4.4)),
+        block("end", (4.0, 3.6), (4.0, 4.4)),
+    ]
+    .concat();
+    for algorithm in ["bug1", "bug2"] {
+        let s = hall(
+            12.0,
+            8.0,
+            &objects,
+            (5.0, 4.0, 0.0),
+            "hokuyo_utm30lx",
+            &format!("type = \"{algorithm}\"\npose = \"truth\"\ngoal = [1.5, 4.0]"),
+        );
+        let (_, summary) = drive(&s, 400.0, 1);
+        assert_eq!(
+            summary.outcome,
+            RunOutcome::Reached,
+            "{algorithm}: {summary:?}"
+        );
+        assert_eq!(summary.bumps, 0, "{algorithm}");
+    }
+}
+
 /// A scenario with `objects` in a closed `w` × `h` hall, the robot at `start` (x, y, yaw°)
 /// with one sensor of `preset`, and `mission`.
 fn hall(

@@ -47,7 +47,10 @@
 //! * every `no_path` condition is first met with a **standoff retry**: the bumpers' safety
 //!   distance shrinks to 0.6 of itself, down to the robot's half-diagonal plus
 //!   [`MIN_CLEARANCE`], and the Bug starts again where the robot is (a new m-line for Bug2).
-//!   Only at the floor is `no_path` reported. The retries are in the report.
+//!   At the floor it starts once more with the boundary kept on the **other side**: a real
+//!   follower passes gaps and closes loops differently going the other way round, while a
+//!   goal that cannot be reached is found so both ways. Only then is `no_path` reported.
+//!   The retries are in the report; the bumpers keep what they remember across them;
 //! * a robot that has not got [`STILL_RADIUS`] from one place in [`STILL_TIME`] (turning on
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
 //!   a corner) has met a `no_path` condition too, and retries with a smaller standoff;
@@ -56,9 +59,10 @@
 //!   on to where the turn is clear, if the sensor sees that within 0.5 m (a corner beside
 //!   the body; a 270° laser is blind behind), else backs to where it is clear within 0.3 m,
 //!   else backs off a little where the way behind is seen free and backing takes the body
-//!   away from what it would sweep; a turn that bumped backs off 0.15 m;
+//!   away from what it would sweep, else (a way narrower than the turning circle) drives on
+//!   along it, or back, up to 3 m to where it is clear; a turn that bumped backs off 0.15 m;
 //! * turning about or leaving waits while the follower is committed to a gap
-//!   ([`super::passage::Passage::committed`]);
+//!   ([`super::passage::Passage::committed`]: in it, not on the way to it);
 //! * every command then passes the [`super::guard`]: swept along its arc, it must not bring
 //!   the body to touch a return.
 
@@ -102,6 +106,10 @@ const BACK_OFF: f64 = 0.15;
 /// where it is clear, if that is seen free within this distance, m (half a body length
 /// past a corner beside it).
 const SHIFT_MAX: f64 = 0.5;
+/// With no short move clearing a turn on the spot (a way between two sides nearer together
+/// than the body's turning circle), the robot drives on along the way, or back, up to this
+/// far to where the turn is clear, m: standing still there is stuck for good.
+const ESCAPE_MAX: f64 = 3.0;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
 /// A robot that stays within this distance of one place ...
@@ -205,6 +213,9 @@ pub struct RetryReport {
     pub after: String,
     /// The new safety distance, m.
     pub safety: f64,
+    /// The side the boundary is kept on from here: `left` or `right` (the other side than
+    /// before once the standoff is at its floor).
+    pub follow: &'static str,
 }
 
 #[derive(Clone, Debug)]
@@ -359,6 +370,8 @@ pub struct BugController {
     backing: f64,
     /// Distance moved (on or back) before the turn now wanted (believed), m, and where from.
     shifted: (f64, Option<DVec2>),
+    /// Whether the retry with the boundary on the other side was made.
+    side_retried: bool,
     report: BugReport,
 }
 
@@ -384,6 +397,7 @@ impl BugController {
             turned: false,
             backing: 0.0,
             shifted: (0.0, None),
+            side_retried: false,
             report,
         }
     }
@@ -401,23 +415,29 @@ impl BugController {
     /// A `no_path` condition was met at `p`. Before believing it, retry from here with the
     /// bumpers' safety distance shrunk step by step down to the body plus [`MIN_CLEARANCE`]:
     /// a way narrower than twice the standoff (a doorway, a gap between a hedge and a wall)
-    /// looks closed at the standoff and open nearer in.
+    /// looks closed at the standoff and open nearer in. At the floor, retry once more with
+    /// the boundary kept on the other side: a real follower passes gaps and closes loops
+    /// differently going the other way round, while a goal that cannot be reached is found
+    /// so both ways.
     fn no_path(&mut self, reason: &str, p: DVec2, vehicle: &VehicleSpec) -> Decision {
         let safety = self.bumpers.config().safety_for(vehicle);
-        let Some(next) = retry_safety(safety, vehicle) else {
-            return self.end(Ending::NoPath, reason);
+        let next = match retry_safety(safety, vehicle) {
+            Some(next) => next,
+            None if !self.side_retried => {
+                self.side_retried = true;
+                self.mission.follow = self.mission.follow.other();
+                safety
+            }
+            None => return self.end(Ending::NoPath, reason),
         };
         self.report.retries.push(RetryReport {
             at: p.to_array(),
             after: reason.to_owned(),
             safety: next,
+            follow: self.mission.follow.as_str(),
         });
         self.report.safety = next;
-        self.bumpers = BumperSensor::new(BumperConfig {
-            safety: Some(next),
-            ..self.bumpers.config().clone()
-        })
-        .believing(self.mission.pose);
+        self.bumpers.set_safety(next);
         self.mode = Mode::ToGoal;
         self.start = Some(p);
         self.last_leave = None;
@@ -487,7 +507,9 @@ impl Behaviour for BugController {
                     && backing_eases_turn(b.clearance(), v.length, v.width);
                 let speed = room(SHIFT_MAX, 1.0)
                     .or_else(|| room(2.0 * BACK_OFF, -1.0))
-                    .or(back_off.then_some(-BACK_SPEED));
+                    .or(back_off.then_some(-BACK_SPEED))
+                    .or_else(|| room(ESCAPE_MAX, 1.0))
+                    .or_else(|| room(ESCAPE_MAX, -1.0));
                 if let Some(speed) = speed {
                     d = Decision::Drive(DriveCommand::twist(speed, 0.0));
                     self.turned = false;
@@ -702,10 +724,7 @@ impl BugController {
                             let s = self.follower.side().sign();
                             bd.about_turn -= TURN_RATE * dt;
                             if bd.about_turn <= 0.0 {
-                                let other = match self.follower.side() {
-                                    Side::Left => Side::Right,
-                                    Side::Right => Side::Left,
-                                };
+                                let other = self.follower.side().other();
                                 self.follower =
                                     WallFollower::new(other, self.mission.speed, TURN_RATE)
                                         .passing_gaps(vehicle.length, vehicle.width);

@@ -391,6 +391,14 @@ impl BumperSensor {
         self
     }
 
+    /// Changes the safety distance (a standoff retry), keeping the returns remembered where
+    /// the sensor is blind: the robot is still where it saw them. The sectors are sensed
+    /// anew at the next [`BumperSensor::update`].
+    pub fn set_safety(&mut self, safety: f64) {
+        self.config.safety = Some(safety);
+        self.bumpers = None;
+    }
+
     /// The configuration.
     pub fn config(&self) -> &BumperConfig {
         &self.config
@@ -757,6 +765,33 @@ pub(crate) mod tests {
         let mut b = sense(&ring);
         all_round.remember(&mut b, &ring, &mount, &Pose::default(), 0.0);
         assert!(all_round.memory.is_empty());
+    }
+
+    #[test]
+    fn a_new_safety_distance_keeps_what_the_bumpers_remember() {
+        // A standoff retry where a wall the laser saw is now behind it, blind: backing off
+        // must still see it, and the sectors take the new distance at the next update.
+        let mut sensor = BumperSensor::new(BumperConfig::default());
+        let wall_ahead = |a: f64| {
+            if a.cos() > 0.2 {
+                (1.0 / a.cos()) as f32
+            } else {
+                f32::INFINITY
+            }
+        };
+        let seen = laser_scan(1080, wall_ahead);
+        let mut b = Bumpers::sense(&seen, &Pose::default(), 8, 1.27, 0.5, BumperRule::All);
+        sensor.remember(&mut b, &seen, &Pose::default(), &Pose::default(), 0.0);
+        let remembered = sensor.memory.len();
+        assert!(remembered > 0);
+        sensor.bumpers = Some(b);
+        sensor.set_safety(0.6);
+        assert_eq!(sensor.memory.len(), remembered);
+        assert_eq!(sensor.config().safety, Some(0.6));
+        assert!(
+            sensor.latest().is_none(),
+            "sectors sensed anew at the next update"
+        );
     }
 
     #[test]

@@ -361,12 +361,16 @@ impl Passage {
 
     /// Whether the robot is committed to the passage: turning on the spot or leaving the
     /// boundary now could touch the gap's sides, or would decide between two obstacles
-    /// what belongs to the boundary beyond them. Until the gap is passed and the robot is
-    /// `narrow` metres into the corridor behind it (a long corridor must not hold off a
-    /// Bug's decisions for ever), while that corridor is too narrow to turn in, and while a
-    /// dead-end turn is under way.
+    /// what belongs to the boundary beyond them. From when it drives into the gap until
+    /// the gap is passed and the robot is `narrow` metres into the corridor behind it (a
+    /// long corridor must not hold off a Bug's decisions for ever), while that corridor is
+    /// too narrow to turn in, and while a dead-end turn is under way. Not on the way to the
+    /// point in front of the gap nor turning there to face it: the robot is still in the
+    /// open, and a Bug may leave the boundary for the goal there (an m-line crossing met
+    /// on the way to a gap is a leave point like any other).
     pub fn committed(&self) -> bool {
-        !self.free_to_turn || self.about > 0.0
+        let entered = !matches!(self.phase, Phase::Approach | Phase::Align);
+        entered && (!self.free_to_turn || self.about > 0.0)
     }
 
     /// The world-frame gap being passed.
@@ -788,21 +792,29 @@ mod tests {
 
     #[test]
     fn a_passage_commits_through_a_short_way_and_frees_the_robot_well_into_a_long_corridor() {
-        // The 1.5 m way of the test above: committed all the way through.
+        // The 1.5 m way of the test above (its mouth at y = -1): free on the way to the
+        // point in front of it (a Bug may still leave there), committed from when the body
+        // reaches the mouth all the way through.
+        let mut first = None;
         drive_through_watching(&short_way(), Pose::default(), |pass, pose| {
-            assert!(pass.committed(), "free in a short way at {pose:?}");
+            first.get_or_insert(pass.committed());
+            if pose.y - 0.508 / 2.0 < -1.0 {
+                assert!(pass.committed(), "free in a short way at {pose:?}");
+            }
         });
-        // A 1.2 m doorway into a corridor as wide and 8 m long, closed at its end: free to
-        // turn only once `narrow` (3 m) into it, and committed again for the dead-end turn.
+        assert_eq!(first, Some(false), "committed in the open before the gap");
+        // A 1.2 m doorway into a corridor as wide and 8 m long, closed at its end: once in,
+        // free to turn only `narrow` (3 m) into it, and committed again for the dead-end turn.
         let mut walls = doorway(1.2);
         walls.extend([
             (DVec2::new(1.0, -1.0), DVec2::new(1.0, -9.0)),
             (DVec2::new(1.0, -9.0), DVec2::new(2.2, -9.0)),
             (DVec2::new(2.2, -9.0), DVec2::new(2.2, -1.0)),
         ]);
-        let (mut freed_at, mut turned_committed) = (None, false);
+        let (mut freed_at, mut turned_committed, mut entered) = (None, false, false);
         drive_through_watching(&walls, Pose::default(), |pass, pose| {
-            if !pass.committed() {
+            entered |= pass.committed();
+            if entered && !pass.committed() {
                 freed_at.get_or_insert(pose.y);
             }
             turned_committed |= pass.about > 0.0 && pass.committed();

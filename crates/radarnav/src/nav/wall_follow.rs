@@ -59,6 +59,14 @@ impl Side {
         }
     }
 
+    /// The other side.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Left => Self::Right,
+            Self::Right => Self::Left,
+        }
+    }
+
     /// +1 for left (counter-clockwise angles), −1 for right.
     pub fn sign(self) -> f64 {
         match self {

@@ -165,6 +165,8 @@ pub struct PathTrace {
     pub odometry: Trail,
     /// Where moves were refused (at most [`crate::sim::MAX_BUMP_EVENTS`]).
     pub bumps: Vec<DVec2>,
+    /// A goal to mark (the trial figures), if any.
+    pub goal: Option<DVec2>,
 }
 
 impl PathTrace {
@@ -174,8 +176,8 @@ impl PathTrace {
         self.odometry.end(&summary.final_odometry);
     }
 
-    /// The figure: `world`, the odometry and true paths, bumps, the robot at `start` and at
-    /// the end, titled `title`, `pixels` on its longer side.
+    /// The figure: `world`, the odometry and true paths, bumps, the goal when set, the robot
+    /// at `start` and at the end, titled `title`, `pixels` on its longer side.
     pub fn figure(
         &self,
         world: &World,
@@ -193,6 +195,9 @@ impl PathTrace {
         );
         fig.draw_path(&self.truth.points(), [20, 120, 40], 3.0, "path: true");
         fig.draw_crosses(&self.bumps, [200, 0, 160], "bump");
+        if let Some(goal) = self.goal {
+            fig.draw_crosses(&[goal], [220, 30, 30], "goal");
+        }
         fig.draw_robot(start, vehicle);
         if let Some(end) = self.truth.poses().last() {
             fig.draw_robot(end, vehicle);

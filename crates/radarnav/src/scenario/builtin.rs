@@ -57,6 +57,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/bush-field.toml"),
     ),
     (
+        "nav/bush-cluster",
+        include_str!("../../../../scenarios/nav/bush-cluster.toml"),
+    ),
+    (
         "nav/c-goal",
         include_str!("../../../../scenarios/nav/c-goal.toml"),
     ),
@@ -75,6 +79,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
     (
         "nav/crates-tight",
         include_str!("../../../../scenarios/nav/crates-tight.toml"),
+    ),
+    (
+        "nav/crates-wall",
+        include_str!("../../../../scenarios/nav/crates-wall.toml"),
     ),
     (
         "nav/diag-door",
@@ -163,6 +171,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
     (
         "nav/u-toward",
         include_str!("../../../../scenarios/nav/u-toward.toml"),
+    ),
+    (
+        "nav/wall-field",
+        include_str!("../../../../scenarios/nav/wall-field.toml"),
     ),
 ];
 

@@ -15,8 +15,9 @@
 //!   drives its middle).
 //!
 //! Runs last as long as the scenario says, or longer when the bounds need it: twice the first
-//! attempt's bound at cruise speed for it and for each standoff retry the bumpers allow, plus
-//! a minute. A timeout means the robot was lost, not slow.
+//! attempt's bound at cruise speed for it, for each standoff retry the bumpers allow and for
+//! the retry on the other side at the floor, plus a minute. A timeout means the robot was
+//! lost, not slow.
 
 pub mod geometry;
 
@@ -281,9 +282,10 @@ impl TrialMap {
             controller_hz: self.controller_hz,
             kind: MissionKind::Bug(bug.clone()),
         };
-        // Time for a path as long as the bounds of the first attempt and of every standoff
-        // retry the bumpers allow, at half the cruise speed.
-        let mut attempts = 1.0;
+        // Time for a path as long as the bounds of the first attempt, of every standoff
+        // retry the bumpers allow and of the retry on the other side at the floor, at half
+        // the cruise speed.
+        let mut attempts = 2.0;
         let mut safety = bug.bumpers.safety_for(self.robot.vehicle);
         while let Some(next) = retry_safety(safety, self.robot.vehicle) {
             attempts += 1.0;
@@ -305,7 +307,10 @@ impl TrialMap {
             settings,
         )
         .map_err(|err| TrialError::Sim(self.name.clone(), err))?;
-        let mut paths = PathTrace::default();
+        let mut paths = PathTrace {
+            goal: Some(bug.goal),
+            ..PathTrace::default()
+        };
         let Ok(summary) = sim.run(&mut paths);
         paths.end(&summary);
         // A standoff retry starts a new Bug run where it is, nearer its boundaries: the bound
@@ -398,7 +403,7 @@ pub struct TrialResult {
     pub distance: f64,
     /// The algorithm's bound, m: summed over the attempts when the standoff was retried.
     pub bound: f64,
-    /// Bug runs made: 1 plus the standoff retries.
+    /// Bug runs made: 1 plus the standoff retries and the retry on the other side.
     pub attempts: usize,
     /// Simulated time, s.
     pub time: f64,
