@@ -370,6 +370,18 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
             c.name, c.scans, c.rate_hz
         )?;
     }
+    if let Some(a) = &recorded.odometry_errors {
+        let rpe = a.rpe.map_or_else(
+            || "RPE: under 10 m of path".to_owned(),
+            |r| {
+                format!(
+                    "RPE {:.2} % / {:.3} deg/m over {} segments of 10 m",
+                    r.translation_percent, r.rotation_deg_per_m, r.segments
+                )
+            },
+        );
+        writeln!(out, "  odometry: ATE {:.3} m, {rpe}", a.ate_rmse_m)?;
+    }
     let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
     for (name, m) in &recorded.maps {
         writeln!(

@@ -405,12 +405,14 @@ fn run_writes_every_file_and_is_deterministic() {
             "map_radar.pgm",
             "map_radar.png",
             "map_radar.yaml",
+            "odometry.tum",
             "path.png",
             "run.mcap",
             "scans/laser.rnscan",
             "scans/radar.rnscan",
             "summary.json",
-            "trajectory.csv"
+            "trajectory.csv",
+            "truth.tum"
         ]
     );
     assert!(ta == tb, "same seed, different bytes");

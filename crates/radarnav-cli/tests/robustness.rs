@@ -125,7 +125,14 @@ fn a_full_disk_names_the_file_and_leaves_nothing_that_looks_whole() {
         stderr.contains("No space left on device"),
         "the cause is named: {stderr}"
     );
-    let named = ["trajectory.csv", "run.mcap", "radar.rnscan", "laser.rnscan"];
+    let named = [
+        "trajectory.csv",
+        "truth.tum",
+        "odometry.tum",
+        "run.mcap",
+        "radar.rnscan",
+        "laser.rnscan",
+    ];
     assert!(
         named.iter().any(|f| stderr.contains(f)),
         "the file is named: {stderr}"
@@ -133,6 +140,8 @@ fn a_full_disk_names_the_file_and_leaves_nothing_that_looks_whole() {
     // Nothing that looks whole: no final name of a growing file, no summary, no partial.
     for f in [
         "trajectory.csv",
+        "truth.tum",
+        "odometry.tum",
         "run.mcap",
         "summary.json",
         ".partial",

@@ -2,7 +2,7 @@
 //! through foliage, smoke and dust where a laser scanner cannot.
 //!
 //! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
-//! Modules: [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files and
+//! Modules: [`accuracy`] (trajectory errors, TUM files), [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files and
 //! the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`] (the
 //! P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`] (occupancy
 //! grids that tell seen-through from passable), [`compare`] (exploration experiments), [`trials`]
@@ -15,6 +15,7 @@
 
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod compare;
 pub mod demo;
 pub mod limits;

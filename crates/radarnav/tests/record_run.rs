@@ -242,8 +242,38 @@ fn scan_logs_trajectory_and_summary_read_back() {
         assert!((r[9] - (r[7] - half)).abs() < 2e-4 && (r[10] - (r[7] + half)).abs() < 2e-4);
     }
 
+    // The TUM trajectories hold the same poses, and the summary the odometry's errors.
+    let tum = |name: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(dir.join(name))
+            .unwrap()
+            .lines()
+            .map(|l| l.split(' ').map(|f| f.parse().unwrap()).collect())
+            .collect()
+    };
+    let (truth, odometry) = (tum(files::TRUTH_TUM), tum(files::ODOMETRY_TUM));
+    assert_eq!((truth.len(), odometry.len()), (41, 41));
+    let mut squares = 0.0;
+    for ((t, o), r) in truth.iter().zip(&odometry).zip(&rows) {
+        assert_eq!((t.len(), t[0], o[0]), (8, r[0], r[0]));
+        assert!((t[1] - r[1]).abs() < 2e-5 && (o[1] - r[4]).abs() < 2e-5);
+        // A rotation about z by the yaw.
+        let yaw = 2.0 * t[6].atan2(t[7]);
+        let d = (yaw - r[3].to_radians()).rem_euclid(std::f64::consts::TAU);
+        assert!(d.min(std::f64::consts::TAU - d) < 1e-5, "{t:?} {r:?}");
+        assert_eq!((t[4], t[5]), (0.0, 0.0));
+        squares += (t[1] - o[1]).powi(2) + (t[2] - o[2]).powi(2);
+    }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join(files::SUMMARY)).unwrap()).unwrap();
+    let accuracy = &json["accuracy"]["odometry"];
+    assert_eq!(accuracy["poses"], 41);
+    let ate = accuracy["ate_rmse_m"].as_f64().unwrap();
+    assert!(
+        ate > 0.0 && (ate - (squares / 41.0).sqrt()).abs() < 1e-5,
+        "{ate}"
+    );
+    // 2 s of driving: under a segment of path.
+    assert!(accuracy["rpe"].is_null());
     assert_eq!(json["scenario"], "foliage-wall");
     assert_eq!(json["mission"], "waypoints");
     assert_eq!(json["bumps"], 0);

@@ -228,7 +228,10 @@ pub fn run_output(robot: &Robot, r: &Recording) -> f64 {
     let steps = (r.duration / r.dt).ceil() + 2.0;
     let mcap = f64::from(u8::from(r.mcap));
     let bag = f64::from(u8::from(r.ros2_bag));
-    let mut bytes = steps * (120.0 + mcap * STEP_BYTES + bag * BAG_STEP_BYTES);
+    // A row of trajectory.csv, and a line of truth.tum and of odometry.tum.
+    const TUM_LINE_BYTES: f64 = 100.0;
+    let mut bytes =
+        steps * (120.0 + 2.0 * TUM_LINE_BYTES + mcap * STEP_BYTES + bag * BAG_STEP_BYTES);
     for s in &robot.sensors {
         let c = &s.config;
         let rays = (c.azimuth_count() * c.elevations.len()) as f64;

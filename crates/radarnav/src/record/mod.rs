@@ -1,4 +1,5 @@
-//! Recording a run to a directory (DESIGN §8): `trajectory.csv`, one binary scan log per
+//! Recording a run to a directory (DESIGN §8): `trajectory.csv`, `truth.tum`,
+//! `odometry.tum`, one binary scan log per
 //! sensor under `scans/`, `summary.json`, `path.png`, `run.mcap`, and for each map built
 //! during the run (see [`Recorder::with_maps`]) `map_<name>.png`, `.pgm`, `.yaml` and `.npy`
 //! (see [`crate::map::export`]) with its scores in `summary.json`. With
@@ -6,6 +7,9 @@
 //! `radar/<sensor>/<µs>.png` (the Oxford Radar RobotCar layout) with `radar.timestamps`
 //! and `detections.csv` (see [`radar_images`]). With [`RecordOptions::ros2_bag`], a rosbag2
 //! directory `ros2_bag/` (see [`ros2`]).
+//!
+//! `truth.tum` and `odometry.tum` hold the same poses as TUM trajectories, and
+//! `summary.json` the odometry's ATE and RPE against the truth (see [`crate::accuracy`]).
 //!
 //! `trajectory.csv` has one row per step:
 //! `time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped` — the true
@@ -33,6 +37,7 @@ use glam::DVec2;
 use serde::Serialize;
 use thiserror::Error;
 
+use crate::accuracy::{Accuracy, Meter, tum_line};
 use crate::map::{MapError, MapScores, Mapper, export, score_maps};
 use crate::output::Staged;
 use crate::pose::Pose;
@@ -103,6 +108,10 @@ impl Default for RecordOptions {
 pub mod files {
     /// Per-step log.
     pub const TRAJECTORY: &str = "trajectory.csv";
+    /// The true path, TUM format (`t x y z qx qy qz qw`), one pose per step.
+    pub const TRUTH_TUM: &str = "truth.tum";
+    /// The odometry's path, likewise.
+    pub const ODOMETRY_TUM: &str = "odometry.tum";
     /// Run summary.
     pub const SUMMARY: &str = "summary.json";
     /// Top-down figure of the driven path.
@@ -233,6 +242,10 @@ pub struct Recorder<'w> {
     /// The growing files, under their temporary names until [`Recorder::finish`].
     staged: Staged,
     trajectory: Out,
+    /// `truth.tum` and `odometry.tum`.
+    tum: [Out; 2],
+    /// The odometry's errors against the truth, step by step.
+    odometry_errors: Meter,
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
     #[cfg(feature = "mcap")]
     mcap: Option<mcap_log::McapLog<Out>>,
@@ -306,6 +319,10 @@ impl<'w> Recorder<'w> {
             "time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped"
         )
         .map_err(io_at(&tpath))?;
+        let tum = [
+            create(&mut staged, &dir.join(files::TRUTH_TUM))?,
+            create(&mut staged, &dir.join(files::ODOMETRY_TUM))?,
+        ];
         let mut scan_logs = Vec::new();
         if options.scans && !robot.sensors.is_empty() {
             let sdir = dir.join(files::SCANS);
@@ -343,6 +360,8 @@ impl<'w> Recorder<'w> {
             dir: dir.to_owned(),
             staged,
             trajectory,
+            tum,
+            odometry_errors: Meter::default(),
             scan_logs,
             #[cfg(feature = "mcap")]
             mcap,
@@ -500,6 +519,13 @@ impl<'w> Recorder<'w> {
         })?;
         let tpath = self.dir.join(files::TRAJECTORY);
         self.trajectory.flush().map_err(io_at(&tpath))?;
+        for (out, name) in self
+            .tum
+            .iter_mut()
+            .zip([files::TRUTH_TUM, files::ODOMETRY_TUM])
+        {
+            out.flush().map_err(io_at(&self.dir.join(name)))?;
+        }
         #[cfg(feature = "mcap")]
         self.log_grids(summary.duration)?;
         for (path, log) in std::mem::take(&mut self.scan_logs) {
@@ -613,10 +639,12 @@ impl<'w> Recorder<'w> {
             )?);
             maps.push(MapReport::new(m, stem, scores));
         }
+        let odometry = self.odometry_errors.result();
         let report = Report {
             scenario: &scenario.name,
             mission: scenario.mission.as_ref().map(|m| m.kind_name()),
             summary,
+            accuracy: odometry.map(|odometry| AccuracyReport { odometry }),
             maps,
         };
         let spath = self.dir.join(files::SUMMARY);
@@ -627,6 +655,7 @@ impl<'w> Recorder<'w> {
         self.written.push(spath);
         Ok(Recorded {
             files: self.written,
+            odometry_errors: odometry,
             maps: report
                 .maps
                 .iter()
@@ -641,6 +670,8 @@ impl<'w> Recorder<'w> {
 pub struct Recorded {
     /// Every file, in the order written.
     pub files: Vec<PathBuf>,
+    /// The odometry's errors against the truth (`None`: no step).
+    pub odometry_errors: Option<Accuracy>,
     /// Each map's name and scores.
     pub maps: Vec<(String, MapScores)>,
 }
@@ -651,7 +682,16 @@ struct Report<'a> {
     mission: Option<&'a str>,
     #[serde(flatten)]
     summary: &'a RunSummary,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    accuracy: Option<AccuracyReport>,
     maps: Vec<MapReport<'a>>,
+}
+
+/// The trajectory errors in `summary.json` (ATE and RPE, as `evo` computes them from the TUM
+/// files).
+#[derive(Serialize)]
+struct AccuracyReport {
+    odometry: Accuracy,
 }
 
 /// A map's entry in `summary.json`.
@@ -764,6 +804,14 @@ impl Recorder<'_> {
             path: self.dir.join(files::TRAJECTORY),
             cause,
         })?;
+        for ((out, name), pose) in (self.tum.iter_mut())
+            .zip([files::TRUTH_TUM, files::ODOMETRY_TUM])
+            .zip([t, o])
+        {
+            out.write_all(tum_line(s.time, pose).as_bytes())
+                .map_err(io_at(&self.dir.join(name)))?;
+        }
+        self.odometry_errors.push(t, o);
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
             m.step(s).map_err(at_mcap(&self.dir))?;
