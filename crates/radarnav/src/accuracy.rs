@@ -14,8 +14,6 @@
 //!   (degrees). Also given per metre of segment: translation as a percentage, rotation in
 //!   degrees per metre.
 
-use std::fmt::Write as _;
-
 use serde::Serialize;
 
 use glam::DVec3;
@@ -134,19 +132,20 @@ impl Meter {
     }
 }
 
-/// One line of a TUM trajectory file: `t x y z qx qy qz qw`, the quaternion of a rotation by
-/// the yaw about z. Enough digits that `evo` reads back the errors this module computes
-/// (micrometres, nanoseconds).
-pub fn tum_line(time: f64, pose: &Pose) -> String {
+/// Writes one line of a TUM trajectory file: `t x y z qx qy qz qw`, the quaternion of a
+/// rotation by the yaw about z. Enough digits that `evo` reads back the errors this module
+/// computes (micrometres, nanoseconds).
+pub fn write_tum_line(
+    out: &mut impl std::io::Write,
+    time: f64,
+    pose: &Pose,
+) -> std::io::Result<()> {
     let (s, c) = (0.5 * pose.yaw).sin_cos();
-    let mut line = String::with_capacity(96);
-    // Writing to a String cannot fail.
-    let _ = writeln!(
-        line,
+    writeln!(
+        out,
         "{time:.9} {:.6} {:.6} {:.6} 0 0 {s:.9} {c:.9}",
         pose.x, pose.y, pose.z
-    );
-    line
+    )
 }
 
 #[cfg(test)]
@@ -240,9 +239,15 @@ mod tests {
 
     #[test]
     fn a_tum_line_carries_the_yaw_as_a_unit_quaternion_about_z() {
-        let line = tum_line(1.5, &Pose::new(1.0, -2.0, 0.0, std::f64::consts::FRAC_PI_2));
+        let mut line = Vec::new();
+        write_tum_line(
+            &mut line,
+            1.5,
+            &Pose::new(1.0, -2.0, 0.0, std::f64::consts::FRAC_PI_2),
+        )
+        .expect("to memory");
         assert_eq!(
-            line,
+            String::from_utf8(line).expect("text"),
             "1.500000000 1.000000 -2.000000 0.000000 0 0 0.707106781 0.707106781\n"
         );
     }

@@ -37,7 +37,7 @@ use glam::DVec2;
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::accuracy::{Accuracy, Meter, tum_line};
+use crate::accuracy::{Accuracy, Meter, write_tum_line};
 use crate::map::{MapError, MapScores, Mapper, export, score_maps};
 use crate::output::Staged;
 use crate::pose::Pose;
@@ -808,8 +808,7 @@ impl Recorder<'_> {
             .zip([files::TRUTH_TUM, files::ODOMETRY_TUM])
             .zip([t, o])
         {
-            out.write_all(tum_line(s.time, pose).as_bytes())
-                .map_err(io_at(&self.dir.join(name)))?;
+            write_tum_line(out, s.time, pose).map_err(io_at(&self.dir.join(name)))?;
         }
         self.odometry_errors.push(t, o);
         #[cfg(feature = "mcap")]
