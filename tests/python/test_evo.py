@@ -5,7 +5,7 @@ the ATE and RPE that radarnav wrote in `summary.json`.
 turn-rate noise) drifts. evo reads `truth.tum` and `odometry.tum` with its own TUM reader and
 computes the absolute pose error (translation part, no alignment) and the relative pose error
 over 10 m of path (consecutive pairs, translation part and rotation angle); each must be
-within a millionth of radarnav's (the issue asks for 1 %).
+within a ten-thousandth of radarnav's (the issue asks for 1 %).
 """
 
 import json
@@ -47,9 +47,9 @@ class EvoReadsTheTrajectories(unittest.TestCase):
 
     def assert_close(self, theirs, ours, what):
         self.assertGreater(ours, 0.0, what)
-        # The issue asks for 1 %; the two agree to a few parts in a billion (the files keep
-        # micrometres), so a millionth is asked.
-        self.assertLessEqual(abs(theirs - ours), 1e-6 * ours, f"{what}: evo {theirs}, radarnav {ours}")
+        # The issue asks for 1 %. The files keep micrometres: here the two agree to a few parts
+        # in a billion, on short runs to a few parts in a million; a ten-thousandth is asked.
+        self.assertLessEqual(abs(theirs - ours), 1e-4 * ours, f"{what}: evo {theirs}, radarnav {ours}")
 
     def test_every_step_is_a_pose(self):
         # One pose per step and the state at the end.
