@@ -32,6 +32,7 @@ pub mod ros2_node;
 pub mod scenario;
 pub mod sensor;
 pub mod sim;
+pub mod slam;
 pub mod stamp;
 pub mod trials;
 pub mod usarsim;
