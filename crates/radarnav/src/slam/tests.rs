@@ -88,7 +88,7 @@ fn radar_registration_holds_a_drifting_odometry_to_the_truth() {
     let (drift, scale) = (0.5f64.to_radians(), 1.03);
     let (xy, yaw, stats) = track("foliage-wall", "radar", &truth, drift, scale);
     assert!(
-        xy < 0.1 && yaw < 2f64.to_radians(),
+        xy < 0.06 && yaw < 1.5f64.to_radians(),
         "{xy} m, {} deg, {stats:?}",
         yaw.to_degrees()
     );
@@ -104,7 +104,7 @@ fn laser_registration_holds_too() {
     let truth = lap();
     let (xy, yaw, stats) = track("foliage-wall", "laser", &truth, 0.3f64.to_radians(), 0.98);
     assert!(
-        xy < 0.1 && yaw < 2f64.to_radians(),
+        xy < 0.06 && yaw < 1.5f64.to_radians(),
         "{xy} m, {} deg, {stats:?}",
         yaw.to_degrees()
     );
