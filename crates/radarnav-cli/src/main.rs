@@ -188,7 +188,8 @@ enum Command {
         /// Build no map.
         #[arg(long, conflicts_with = "maps")]
         no_maps: bool,
-        /// Pose that places the scans in the maps: `truth` or `odometry`.
+        /// Pose that places the scans in the maps: `truth`, `odometry` or `slam` (the robot's
+        /// localiser, `[robot.slam]`).
         #[arg(long, default_value = "truth")]
         map_pose: String,
         /// Map cell size, metres.

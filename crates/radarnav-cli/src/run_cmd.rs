@@ -221,7 +221,7 @@ fn mappers(a: &RunArgs<'_>, robot: &Robot) -> Result<(Vec<Mapper>, f64)> {
     };
     let pose = PoseSource::parse(a.map_pose).with_context(|| {
         format!(
-            "--map-pose `{}`: expected `truth` or `odometry`",
+            "--map-pose `{}`: expected `truth`, `odometry` or `slam`",
             a.map_pose
         )
     })?;
@@ -370,7 +370,14 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
             c.name, c.scans, c.rate_hz
         )?;
     }
-    if let Some(a) = &recorded.odometry_errors {
+    let slam = summary.slam.as_ref().map(|s| format!("slam ({})", s.sensor));
+    for (name, errors) in [
+        (Some("odometry".to_owned()), &recorded.odometry_errors),
+        (slam, &recorded.slam_errors),
+    ] {
+        let (Some(name), Some(a)) = (name, errors) else {
+            continue;
+        };
         let rpe = a.rpe.map_or_else(
             || "RPE: under 10 m of path".to_owned(),
             |r| {
@@ -380,7 +387,7 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
                 )
             },
         );
-        writeln!(out, "  odometry: ATE {:.3} m, {rpe}", a.ate_rmse_m)?;
+        writeln!(out, "  {name}: ATE {:.3} m, {rpe}", a.ate_rmse_m)?;
     }
     let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
     for (name, m) in &recorded.maps {

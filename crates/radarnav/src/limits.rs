@@ -135,6 +135,10 @@ limits! {
     SPEED_NOISE = "speed_noise" in "robot.odometry": 0.0, 1.0, "", "relative standard deviation";
     /// Odometry yaw drift and noise.
     YAW_RATE_NOISE = "yaw_drift_deg_s, yaw_noise_deg_s" in "robot.odometry": -90.0, 90.0, "deg/s", "noise must be >= 0";
+    /// Cell size of the localiser's finest likelihood level.
+    SLAM_RESOLUTION = "resolution" in "robot.slam": 0.01, 1.0, "m", "Hector SLAM: 0.05";
+    /// Farthest return the localiser registers.
+    SLAM_RANGE = "max_range" in "robot.slam": 1.0, 1000.0, "m", "beyond the sensor's range it changes nothing";
     /// Field of view.
     FOV = "fov_deg" in "robot.sensor": 1e-3, 360.0, "deg", "";
     /// Angular step.

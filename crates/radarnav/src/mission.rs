@@ -16,6 +16,7 @@ use crate::nav::{
     BugController, BugMission, ExploreController, ExploreMission, TeleopController,
     WaypointController, WithRecoil,
 };
+use crate::map::PoseSource;
 use crate::sim::Controller;
 use crate::vehicle::DriveCommand;
 
@@ -76,6 +77,8 @@ pub struct WaypointMission {
     pub tolerance: f64,
     /// Start over after the last point.
     pub repeat: bool,
+    /// The pose it steers on (default: the odometry).
+    pub pose: PoseSource,
 }
 
 /// A mission that cannot be started.

@@ -29,6 +29,9 @@ pub enum PoseSource {
     Truth,
     /// The wheel odometry: what a robot without localisation has; the map shows its drift.
     Odometry,
+    /// The localiser's estimate ([`crate::slam`]): scans registered against the map of the
+    /// scans before them, the odometry as the motion prior.
+    Slam,
 }
 
 impl PoseSource {
@@ -37,14 +40,16 @@ impl PoseSource {
         match self {
             Self::Truth => "truth",
             Self::Odometry => "odometry",
+            Self::Slam => "slam",
         }
     }
 
-    /// Parses `truth` or `odometry`.
+    /// Parses `truth`, `odometry` or `slam`.
     pub fn parse(s: &str) -> Option<Self> {
         match s {
             "truth" => Some(Self::Truth),
             "odometry" => Some(Self::Odometry),
+            "slam" => Some(Self::Slam),
             _ => None,
         }
     }
@@ -396,10 +401,12 @@ impl Mapper {
         self.grid.mark_cells(cells, true, Layers::Passable);
     }
 
-    fn pose_of(&self, truth: &Pose, odometry: &Pose) -> Pose {
+    /// The pose the map trusts; on `slam` without a localiser in the run, the odometry.
+    fn pose_of(&self, truth: &Pose, odometry: &Pose, slam: Option<Pose>) -> Pose {
         match self.config.pose {
             PoseSource::Truth => *truth,
             PoseSource::Odometry => *odometry,
+            PoseSource::Slam => slam.unwrap_or(*odometry),
         }
     }
 }
@@ -435,7 +442,7 @@ impl Observer for Mapper {
 
     fn on_scan(&mut self, e: &ScanEvent<'_>) -> Result<(), Self::Error> {
         if let Some(Some(mount)) = self.mounts.get(e.sensor) {
-            let pose = self.pose_of(&e.truth, &e.odometry).compose(mount);
+            let pose = self.pose_of(&e.truth, &e.odometry, e.slam).compose(mount);
             self.insert_scan(e.scan, &pose);
         }
         Ok(())
@@ -448,7 +455,7 @@ impl Observer for Mapper {
         if !self.config.body {
             return Ok(());
         }
-        let pose = self.pose_of(&step.truth, &step.odometry);
+        let pose = self.pose_of(&step.truth, &step.odometry, step.slam);
         let moved = self.last_body.is_none_or(|l| {
             (l.x - pose.x).hypot(l.y - pose.y) >= self.config.resolution / 2.0
                 || crate::pose::wrap_angle(l.yaw - pose.yaw).abs() >= 2f64.to_radians()

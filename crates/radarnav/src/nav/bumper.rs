@@ -630,6 +630,8 @@ pub(crate) mod tests {
                 bumped: false,
                 scans: &scans,
                 scan_odometry: &[Some(at_scan)],
+                slam: None,
+                scan_slam: &[],
                 sensors: &sensors,
                 vehicle,
             };

@@ -221,7 +221,7 @@ impl ExploreController {
             f.stamps[i] = scan.stamp;
             let pose = match self.mission.pose {
                 PoseSource::Truth => scan.pose,
-                PoseSource::Odometry => match input.scan_odometry.get(i).copied().flatten() {
+                source => match super::scan_pose(source, input, i) {
                     Some(o) => o.compose(&input.sensors[i].mount),
                     None => continue,
                 },

@@ -23,11 +23,14 @@ use crate::sim::{ControlInput, Controller, Decision};
 use crate::vehicle::DriveCommand;
 use guard::Guarded;
 
-/// The robot pose a controller navigates on: the odometry, or the truth when asked.
+/// The robot pose a controller navigates on: the odometry, the localiser's estimate, or the
+/// truth when asked. On `slam` without a localiser in the run (the scenario starts one
+/// whenever a mission asks for it), the odometry.
 pub fn nav_pose(source: PoseSource, input: &ControlInput<'_>) -> Pose {
     match source {
         PoseSource::Truth => *input.truth,
         PoseSource::Odometry => *input.odometry,
+        PoseSource::Slam => input.slam.copied().unwrap_or(*input.odometry),
     }
 }
 
@@ -41,6 +44,8 @@ pub fn scan_pose(source: PoseSource, input: &ControlInput<'_>, i: usize) -> Opti
             Some(scan.pose.compose(&input.sensors.get(i)?.mount.inverse()))
         }
         PoseSource::Odometry => input.scan_odometry.get(i).copied().flatten(),
+        PoseSource::Slam => (input.scan_slam.get(i).copied().flatten())
+            .or_else(|| input.scan_odometry.get(i).copied().flatten()),
     }
 }
 
@@ -219,6 +224,8 @@ mod tests {
             bumped,
             scans: &[],
             scan_odometry: &[],
+            slam: None,
+            scan_slam: &[],
             sensors: &[],
             vehicle,
         };

@@ -15,7 +15,8 @@ const K_HEADING: f64 = 2.0;
 const K_DISTANCE: f64 = 1.0;
 
 /// Visits the mission's points in turn: turn towards the point, drive while steering onto it,
-/// slow down on arrival. It trusts the odometry, so its path drifts with it.
+/// slow down on arrival. It trusts the pose it is told to (the odometry by default, so its
+/// path drifts with it).
 #[derive(Clone, Debug)]
 pub struct WaypointController {
     mission: WaypointMission,
@@ -45,7 +46,7 @@ impl Controller for WaypointController {
     }
 
     fn update(&mut self, input: &ControlInput<'_>) -> Decision {
-        let pose = input.odometry;
+        let pose = &super::nav_pose(self.mission.pose, input);
         let here = DVec2::new(pose.x, pose.y);
         loop {
             let Some(&target) = self.mission.points.get(self.next) else {

@@ -9,7 +9,8 @@
 //! directory `ros2_bag/` (see [`ros2`]).
 //!
 //! `truth.tum` and `odometry.tum` hold the same poses as TUM trajectories, and
-//! `summary.json` the odometry's ATE and RPE against the truth (see [`crate::accuracy`]).
+//! `summary.json` the odometry's ATE and RPE against the truth (see [`crate::accuracy`]); a
+//! robot that runs a localiser ([`crate::slam`]) adds `slam.tum` and the localiser's errors.
 //!
 //! `trajectory.csv` has one row per step:
 //! `time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped` — the true
@@ -112,6 +113,8 @@ pub mod files {
     pub const TRUTH_TUM: &str = "truth.tum";
     /// The odometry's path, likewise.
     pub const ODOMETRY_TUM: &str = "odometry.tum";
+    /// The localiser's path, TUM format, one pose per step (when the robot runs one).
+    pub const SLAM_TUM: &str = "slam.tum";
     /// Run summary.
     pub const SUMMARY: &str = "summary.json";
     /// Top-down figure of the driven path.
@@ -242,10 +245,12 @@ pub struct Recorder<'w> {
     /// The growing files, under their temporary names until [`Recorder::finish`].
     staged: Staged,
     trajectory: Out,
-    /// `truth.tum` and `odometry.tum`.
-    tum: [Out; 2],
+    /// `truth.tum`, `odometry.tum` and, when the robot runs a localiser, `slam.tum`.
+    tum: Vec<(Out, &'static str)>,
     /// The odometry's errors against the truth, step by step.
     odometry_errors: Meter,
+    /// The localiser's (when the robot runs one).
+    slam_errors: Option<Meter>,
     scan_logs: Vec<(PathBuf, ScanLogWriter<Out>)>,
     #[cfg(feature = "mcap")]
     mcap: Option<mcap_log::McapLog<Out>>,
@@ -319,10 +324,12 @@ impl<'w> Recorder<'w> {
             "time,x,y,yaw_deg,odom_x,odom_y,odom_yaw_deg,v,omega_deg_s,left,right,bumped"
         )
         .map_err(io_at(&tpath))?;
-        let tum = [
-            create(&mut staged, &dir.join(files::TRUTH_TUM))?,
-            create(&mut staged, &dir.join(files::ODOMETRY_TUM))?,
-        ];
+        let mut tum = Vec::new();
+        for name in [files::TRUTH_TUM, files::ODOMETRY_TUM, files::SLAM_TUM] {
+            if name != files::SLAM_TUM || robot.slam.is_some() {
+                tum.push((create(&mut staged, &dir.join(name))?, name));
+            }
+        }
         let mut scan_logs = Vec::new();
         if options.scans && !robot.sensors.is_empty() {
             let sdir = dir.join(files::SCANS);
@@ -362,6 +369,7 @@ impl<'w> Recorder<'w> {
             trajectory,
             tum,
             odometry_errors: Meter::default(),
+            slam_errors: robot.slam.map(|_| Meter::default()),
             scan_logs,
             #[cfg(feature = "mcap")]
             mcap,
@@ -514,16 +522,13 @@ impl<'w> Recorder<'w> {
             time: summary.duration,
             truth: summary.final_pose,
             odometry: summary.final_odometry,
+            slam: summary.slam.as_ref().map(|s| s.final_pose),
             command: crate::vehicle::Twist::default(),
             bumped: false,
         })?;
         let tpath = self.dir.join(files::TRAJECTORY);
         self.trajectory.flush().map_err(io_at(&tpath))?;
-        for (out, name) in self
-            .tum
-            .iter_mut()
-            .zip([files::TRUTH_TUM, files::ODOMETRY_TUM])
-        {
+        for (out, name) in &mut self.tum {
             out.flush().map_err(io_at(&self.dir.join(name)))?;
         }
         #[cfg(feature = "mcap")]
@@ -640,11 +645,12 @@ impl<'w> Recorder<'w> {
             maps.push(MapReport::new(m, stem, scores));
         }
         let odometry = self.odometry_errors.result();
+        let slam = self.slam_errors.as_ref().and_then(Meter::result);
         let report = Report {
             scenario: &scenario.name,
             mission: scenario.mission.as_ref().map(|m| m.kind_name()),
             summary,
-            accuracy: odometry.map(|odometry| AccuracyReport { odometry }),
+            accuracy: odometry.map(|odometry| AccuracyReport { odometry, slam }),
             maps,
         };
         let spath = self.dir.join(files::SUMMARY);
@@ -656,6 +662,7 @@ impl<'w> Recorder<'w> {
         Ok(Recorded {
             files: self.written,
             odometry_errors: odometry,
+            slam_errors: slam,
             maps: report
                 .maps
                 .iter()
@@ -672,6 +679,8 @@ pub struct Recorded {
     pub files: Vec<PathBuf>,
     /// The odometry's errors against the truth (`None`: no step).
     pub odometry_errors: Option<Accuracy>,
+    /// The localiser's (`None`: no step, or no localiser).
+    pub slam_errors: Option<Accuracy>,
     /// Each map's name and scores.
     pub maps: Vec<(String, MapScores)>,
 }
@@ -692,6 +701,8 @@ struct Report<'a> {
 #[derive(Serialize)]
 struct AccuracyReport {
     odometry: Accuracy,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    slam: Option<Accuracy>,
 }
 
 /// A map's entry in `summary.json`.
@@ -804,13 +815,16 @@ impl Recorder<'_> {
             path: self.dir.join(files::TRAJECTORY),
             cause,
         })?;
-        for ((out, name), pose) in (self.tum.iter_mut())
-            .zip([files::TRUTH_TUM, files::ODOMETRY_TUM])
-            .zip([t, o])
-        {
-            write_tum_line(out, s.time, pose).map_err(io_at(&self.dir.join(name)))?;
+        // A localiser's estimate exists from the first step on; the odometry stands in for a
+        // step that has none (a summary's end state of a run without one).
+        let slam = s.slam.unwrap_or(*o);
+        for ((out, name), pose) in self.tum.iter_mut().zip([t, o, &slam]) {
+            write_tum_line(out, s.time, pose).map_err(io_at(&self.dir.join(*name)))?;
         }
         self.odometry_errors.push(t, o);
+        if let Some(m) = &mut self.slam_errors {
+            m.push(t, &slam);
+        }
         #[cfg(feature = "mcap")]
         if let Some(m) = &mut self.mcap {
             m.step(s).map_err(at_mcap(&self.dir))?;

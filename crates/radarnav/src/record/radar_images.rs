@@ -196,6 +196,7 @@ mod tests {
                 mount: Pose::new(0.0, 0.0, 0.5, 0.0),
             }],
             odometry: Default::default(),
+            slam: None,
         }
     }
 
@@ -204,6 +205,7 @@ mod tests {
             time,
             truth: Pose::new(x, 0.0, 0.0, 0.0),
             odometry: Pose::new(x, 0.0, 0.0, 0.0),
+            slam: None,
             command: Twist { v, omega: 0.0 },
             bumped: false,
         }

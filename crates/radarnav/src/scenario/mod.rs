@@ -40,7 +40,7 @@ use crate::nav::{
     BugAlgorithm, BugMission, BumperConfig, BumperRule, ExploreMission, Side, Strategy,
 };
 use crate::pose::Pose;
-use crate::sensor::{SensorConfig, preset};
+use crate::sensor::{SensorConfig, SensorKind, preset};
 use crate::vehicle::{DriveCommand, OdometryNoise, VEHICLES, VehicleSpec, vehicle};
 use crate::world::{
     DB_PER_UNIT_EXTINCTION, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialTable, Object, Shape,
@@ -99,6 +99,8 @@ pub struct Robot {
     pub sensors: Vec<MountedSensor>,
     /// Its odometry's noise.
     pub odometry: OdometryNoise,
+    /// Its localiser (`None`: it runs none, and `slam` poses fall back to the odometry).
+    pub slam: Option<crate::slam::SlamConfig>,
 }
 
 impl Robot {
@@ -698,10 +700,12 @@ fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, Scenari
             "a noise's standard deviation must be >= 0",
         ));
     }
+    let slam = slam_config(ctx, spec, &sensors)?;
     Ok(Robot {
         name: spec.name.clone(),
         vehicle,
         odometry,
+        slam,
         start: Pose::new(
             spec.start.x.0,
             spec.start.y.0,
@@ -710,6 +714,50 @@ fn build_robot(ctx: &Ctx, r: &Spanned<spec::RobotSpec>) -> Result<Robot, Scenari
         ),
         sensors,
     })
+}
+
+/// The robot's localiser: `[robot.slam]`, by default on its first radar, else its first
+/// laser (none on a robot with neither, or with `enabled = false`).
+fn slam_config(
+    ctx: &Ctx,
+    spec: &spec::RobotSpec,
+    sensors: &[MountedSensor],
+) -> Result<Option<crate::slam::SlamConfig>, ScenarioError> {
+    let table = spec.slam.as_ref().map(|s| s.get_ref());
+    if table.and_then(|t| t.enabled) == Some(false) {
+        return Ok(None);
+    }
+    let index = match table.and_then(|t| t.sensor.as_ref()) {
+        Some(name) => Some(
+            sensors
+                .iter()
+                .position(|s| &s.name == name.get_ref())
+                .ok_or_else(|| {
+                    let known: Vec<&str> = sensors.iter().map(|s| s.name.as_str()).collect();
+                    ctx.err(
+                        name.span(),
+                        Some("sensor"),
+                        format!(
+                            "robot `{}` has no sensor `{}`; it has: {}",
+                            spec.name,
+                            name.get_ref(),
+                            known.join(", ")
+                        ),
+                    )
+                })?,
+        ),
+        None => [SensorKind::Radar, SensorKind::Laser]
+            .iter()
+            .find_map(|k| sensors.iter().position(|s| s.config.kind == *k)),
+    };
+    Ok(index.map(|i| {
+        let mut c = crate::slam::SlamConfig::for_sensor(i);
+        if let Some(t) = table {
+            c.resolution = t.resolution.map_or(c.resolution, |v| v.0);
+            c.max_range = t.max_range.map_or(c.max_range, |v| v.0);
+        }
+        c
+    }))
 }
 
 fn build_sensor(ctx: &Ctx, s: &Spanned<SensorSpec>) -> Result<MountedSensor, ScenarioError> {
@@ -885,7 +933,7 @@ fn build_mission(
     ];
     let allowed: &[&str] = match kind_name {
         "teleop" => &["commands", "file"],
-        "waypoints" => &["points", "loop", "speed", "tolerance"],
+        "waypoints" => &["points", "loop", "speed", "tolerance", "pose"],
         "bug1" | "bug2" => &[
             "speed",
             "tolerance",
@@ -946,6 +994,7 @@ fn build_mission(
                 speed: spec.speed.map_or(0.5, |v| v.0),
                 tolerance: spec.tolerance.map_or(0.15, |v| v.0),
                 repeat: spec.repeat.unwrap_or(false),
+                pose: nav_pose(ctx, spec)?,
             })
         }
         "bug1" | "bug2" => {
@@ -1063,7 +1112,10 @@ fn nav_pose(ctx: &Ctx, spec: &MissionSpec) -> Result<PoseSource, ScenarioError> 
             ctx.err(
                 f.span(),
                 Some("pose"),
-                format!("expected `odometry` or `truth`, found `{}`", f.get_ref()),
+                format!(
+                    "expected `odometry`, `slam` or `truth`, found `{}`",
+                    f.get_ref()
+                ),
             )
         })
     })

@@ -51,6 +51,10 @@ checked_f64! {
     Diffuse: limits::DIFFUSE;
     /// Relative odometry speed noise.
     SpeedNoise: limits::SPEED_NOISE;
+    /// The localiser's finest cell, m.
+    SlamResolution: limits::SLAM_RESOLUTION;
+    /// The localiser's farthest return, m.
+    SlamRange: limits::SLAM_RANGE;
     /// Odometry yaw drift or noise, degrees/s.
     YawRate: limits::YAW_RATE_NOISE;
     /// Field of view, degrees.
@@ -474,6 +478,22 @@ pub struct RobotSpec {
     /// Odometry noise (defaults: [`crate::vehicle::OdometryNoise::default`]).
     #[serde(default)]
     pub odometry: OdometrySpec,
+    /// The localiser (default: on the first radar, else the first laser).
+    pub slam: Option<Spanned<SlamSpec>>,
+}
+
+/// `[robot.slam]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlamSpec {
+    /// Whether the robot runs a localiser at all (default true).
+    pub enabled: Option<bool>,
+    /// The sensor it registers.
+    pub sensor: Option<Spanned<String>>,
+    /// Finest cell, m.
+    pub resolution: Option<SlamResolution>,
+    /// Farthest return used, m.
+    pub max_range: Option<SlamRange>,
 }
 
 /// `[robot.odometry]`.

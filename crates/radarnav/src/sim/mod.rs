@@ -19,7 +19,7 @@
 
 mod summary;
 
-pub use summary::{BumpEvent, RunOutcome, RunSummary, SensorCount};
+pub use summary::{BumpEvent, RunOutcome, RunSummary, SensorCount, SlamSummary};
 
 use std::collections::VecDeque;
 
@@ -32,6 +32,7 @@ use thiserror::Error;
 use crate::pose::Pose;
 use crate::scenario::{MountedSensor, Robot, Scenario};
 use crate::sensor::{PARALLEL_MIN_RAYS, Scan, ScanDraws, Tracer, with_pool_tracer};
+use crate::slam::{Localiser, SlamStats};
 use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
 use crate::world::World;
 
@@ -53,6 +54,10 @@ pub struct ControlInput<'a> {
     /// The odometry estimate of the robot pose at the time of each latest scan, same order:
     /// where a robot without ground truth believes each scan was taken.
     pub scan_odometry: &'a [Option<Pose>],
+    /// The localiser's estimate of the robot pose now (`None` when the robot runs none).
+    pub slam: Option<&'a Pose>,
+    /// The localiser's estimate of the robot pose at the time of each latest scan, same order.
+    pub scan_slam: &'a [Option<Pose>],
     /// The robot's sensors (names, configs, mounts), same order.
     pub sensors: &'a [MountedSensor],
     /// The vehicle being driven.
@@ -101,6 +106,8 @@ pub struct Step {
     pub truth: Pose,
     /// Odometry estimate at `time`.
     pub odometry: Pose,
+    /// The localiser's estimate at `time` (`None` when the robot runs none).
+    pub slam: Option<Pose>,
     /// The command in force during the step, after the vehicle's limits.
     pub command: Twist,
     /// Whether the step's move was refused by a collision.
@@ -120,6 +127,10 @@ pub struct ScanEvent<'a> {
     /// estimate at the step's start moved by the executed command (the step's noise is drawn
     /// once, at its end).
     pub odometry: Pose,
+    /// The localiser's estimate of the robot pose at the scan's time: for its own sensor's
+    /// scans, the registered pose; for the others, the last registration moved on by the
+    /// odometry (`None` when the robot runs no localiser).
+    pub slam: Option<Pose>,
 }
 
 /// Receives what happens in a run, in time order (a recorder, a mapper, a progress bar).
@@ -244,6 +255,11 @@ pub struct Simulation<'a> {
     next_control: u64,
     latest: Vec<Option<Scan>>,
     latest_odometry: Vec<Option<Pose>>,
+    /// The localiser, when the robot runs one.
+    slam: Option<Localiser>,
+    latest_slam: Vec<Option<Pose>>,
+    /// The localiser's estimate now (kept beside it for `ControlInput`'s reference).
+    slam_now: Option<Pose>,
     command: Twist,
     bumped: bool,
     ending: Option<Ending>,
@@ -324,6 +340,11 @@ impl<'a> Simulation<'a> {
             next_control: 0,
             latest: vec![None; n],
             latest_odometry: vec![None; n],
+            slam: (robot.slam)
+                .filter(|c| c.sensor < n)
+                .map(|c| Localiser::new(c, robot.sensors[c.sensor].mount, start)),
+            latest_slam: vec![None; n],
+            slam_now: None,
             command: Twist::default(),
             bumped: false,
             ending: None,
@@ -357,6 +378,21 @@ impl<'a> Simulation<'a> {
     /// Odometry now.
     pub fn odometry(&self) -> &Odometry {
         &self.odometry
+    }
+
+    /// The localiser's estimate for the odometry reading `odometry` (`None` without one).
+    fn slam_estimate(&self, odometry: &Pose) -> Option<Pose> {
+        self.slam.as_ref().map(|l| l.estimate(odometry))
+    }
+
+    /// The localiser's estimate now (`None` when the robot runs none).
+    pub fn slam(&self) -> Option<Pose> {
+        self.slam_estimate(&self.odometry.pose)
+    }
+
+    /// What the localiser did (`None` when the robot runs none).
+    pub fn slam_stats(&self) -> Option<SlamStats> {
+        self.slam.as_ref().map(Localiser::stats)
     }
 
     /// Runs to the end.
@@ -402,6 +438,7 @@ impl<'a> Simulation<'a> {
         // 2. Controller.
         let rate = self.controller.rate_hz();
         if self.next_control as f64 / rate <= t + TIME_EPS {
+            self.slam_now = self.slam_estimate(&self.odometry.pose);
             let input = ControlInput {
                 time: t,
                 odometry: &self.odometry.pose,
@@ -409,6 +446,8 @@ impl<'a> Simulation<'a> {
                 bumped: self.bumped,
                 scans: &self.latest,
                 scan_odometry: &self.latest_odometry,
+                slam: self.slam_now.as_ref(),
+                scan_slam: &self.latest_slam,
                 sensors: &self.robot.sensors,
                 vehicle: self.robot.vehicle,
             };
@@ -443,6 +482,7 @@ impl<'a> Simulation<'a> {
             time: t,
             truth: start,
             odometry: self.odometry.pose,
+            slam: self.slam_estimate(&self.odometry.pose),
             command: cmd,
             bumped: self.bumped,
         })?;
@@ -511,14 +551,21 @@ impl<'a> Simulation<'a> {
                 }
             };
             self.next_scan[i] += 1;
+            let slam = match self.slam.as_mut() {
+                Some(l) if l.config().sensor == i => Some(l.register(&scan, &odometry)),
+                Some(l) => Some(l.estimate(&odometry)),
+                None => None,
+            };
             observer.on_scan(&ScanEvent {
                 sensor: i,
                 scan: &scan,
                 truth,
                 odometry,
+                slam,
             })?;
             self.latest[i] = Some(scan);
             self.latest_odometry[i] = Some(odometry);
+            self.latest_slam[i] = slam;
         }
     }
 

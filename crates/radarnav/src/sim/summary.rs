@@ -4,6 +4,7 @@ use serde::Serialize;
 
 use super::{Ending, Simulation};
 use crate::pose::{Pose, wrap_angle};
+use crate::slam::SlamStats;
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -66,6 +67,22 @@ pub struct SensorCount {
     pub scans: u64,
 }
 
+/// The localiser's part of a run's summary.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SlamSummary {
+    /// The registered sensor.
+    pub sensor: String,
+    /// Its estimate of the robot pose at the end.
+    pub final_pose: Pose,
+    /// Distance between it and the truth, m.
+    pub error: f64,
+    /// Heading difference, degrees.
+    pub yaw_error_deg: f64,
+    /// Registrations, refusals, keyframes.
+    #[serde(flatten)]
+    pub stats: SlamStats,
+}
+
 /// Summary of a run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RunSummary {
@@ -95,6 +112,10 @@ pub struct RunSummary {
     pub odometry_error: f64,
     /// Heading difference between the two, degrees.
     pub odometry_yaw_error_deg: f64,
+    /// The localiser's estimate at the end, and what it did (absent when the robot runs no
+    /// localiser).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slam: Option<SlamSummary>,
     /// Number of refused moves.
     pub bumps: usize,
     /// Refused moves: the first [`super::MAX_BUMP_EVENTS`].
@@ -128,6 +149,16 @@ impl RunSummary {
             final_odometry: odo,
             odometry_error: (truth.position() - odo.position()).length(),
             odometry_yaw_error_deg: wrap_angle(odo.yaw - truth.yaw).to_degrees(),
+            slam: sim.slam.as_ref().map(|l| {
+                let p = l.estimate(&odo);
+                SlamSummary {
+                    sensor: sim.robot.sensors[l.config().sensor].name.clone(),
+                    final_pose: p,
+                    error: (truth.xy() - p.xy()).length(),
+                    yaw_error_deg: wrap_angle(p.yaw - truth.yaw).to_degrees(),
+                    stats: l.stats(),
+                }
+            }),
             bumps: sim.bump_count,
             bump_events: sim.bumps.clone(),
             sensors: sim

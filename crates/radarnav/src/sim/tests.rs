@@ -226,6 +226,7 @@ fn waypoints_are_reached() {
         ],
         speed: 0.5,
         tolerance: 0.1,
+        pose: crate::map::PoseSource::Odometry,
         repeat: false,
     };
     let ctl = Box::new(WaypointController::new(mission, 10.0));
@@ -304,7 +305,7 @@ proptest! {
         let summary = sim.run(&mut log).unwrap();
         for st in log.steps.iter().chain(std::iter::once(&Step {
             time: summary.duration, truth: summary.final_pose, odometry: summary.final_odometry,
-            command: Twist::default(), bumped: false,
+            slam: None, command: Twist::default(), bumped: false,
         })) {
             prop_assert!(s.world.blocking_object(&r.vehicle.body(&st.truth)).is_none(),
                 "inside an obstacle at t = {}: {:?}", st.time, st.truth);
