@@ -203,6 +203,10 @@ enum Command {
         /// images go to radar/<sensor>/).
         #[arg(long, value_delimiter = ',')]
         add_sensor: Vec<String>,
+        /// The sensor the robot's localiser registers (default: `[robot.slam] sensor`, else
+        /// its first radar, else its first laser); `none` runs no localiser.
+        #[arg(long)]
+        slam_sensor: Option<String>,
         /// Memory the run may plan for, GB (default 4): maps over it are refused before
         /// the run starts.
         #[arg(long, value_parser = number(&limits::MAX_MEMORY))]
@@ -495,6 +499,7 @@ fn run(cli: Cli) -> Result<()> {
             map_resolution,
             map_max_free_range,
             add_sensor,
+            slam_sensor,
             max_memory,
             max_output,
         } => {
@@ -520,6 +525,7 @@ fn run(cli: Cli) -> Result<()> {
                 map_resolution,
                 map_max_free_range,
                 add_sensors: &add_sensor,
+                slam_sensor: slam_sensor.as_deref(),
                 budget: radarnav::limits::budget::Budget::from_gb(max_memory, max_output),
                 stop: &stop,
             })?;

@@ -16,6 +16,7 @@ use radarnav::mission::{MissionKind, TeleopSource, parse_teleop_csv};
 use radarnav::nav::{Idle, TeleopController};
 use radarnav::record::{RecordOptions, Recorder};
 use radarnav::scenario::Robot;
+use radarnav::slam::SlamConfig;
 use radarnav::sim::{
     Controller, NoObserver, Observer, RunSettings, RunSummary, ScanEvent, Simulation, Step,
 };
@@ -181,6 +182,8 @@ pub struct RunArgs<'a> {
     pub map_max_free_range: f64,
     /// Presets to mount on the robot besides its own sensors.
     pub add_sensors: &'a [String],
+    /// The localiser's sensor instead of the scenario's (`none`: no localiser).
+    pub slam_sensor: Option<&'a str>,
     /// Memory and output limits.
     pub budget: Budget,
     /// Set by a signal: the run ends at the end of the step and its files are finished.
@@ -279,7 +282,23 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
     let s = a.scenario;
     let settings = settings(s, a.seed, a.duration);
     let plan = plan(s, a.robot, a.teleop, a.base, false, settings.seed)?;
-    let robot = with_sensors(plan.robot, a.add_sensors)?;
+    let mut robot = with_sensors(plan.robot, a.add_sensors)?;
+    match a.slam_sensor {
+        None => {}
+        Some("none") => robot.slam = None,
+        Some(name) => {
+            let i = (robot.sensors.iter().position(|s| s.name == name)).with_context(|| {
+                let known: Vec<&str> = robot.sensors.iter().map(|s| s.name.as_str()).collect();
+                format!(
+                    "--slam-sensor `{name}`: robot `{}` has no such sensor; it has: {}, or `none`",
+                    robot.name,
+                    known.join(", ")
+                )
+            })?;
+            let c = robot.slam.unwrap_or(SlamConfig::for_sensor(i));
+            robot.slam = Some(SlamConfig { sensor: i, ..c });
+        }
+    }
     let (mut maps, map_cells) = mappers(a, &robot)?;
     let need = budget::run_output(
         &robot,
@@ -416,7 +435,13 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
 pub fn bench_sim(s: &Scenario, seconds: f64, stop: &AtomicBool) -> Result<()> {
     let plan = plan(s, None, None, None, true, s.sim.seed)?;
     let settings = settings(s, None, Some(seconds));
-    let mut sim = Simulation::new(&s.world, plan.robot, plan.controller, settings)?;
+    // The localiser runs only where the mission steers on it: the benchmark times the
+    // simulation and its sensors.
+    let mut robot = plan.robot.clone();
+    if s.mission.as_ref().and_then(|m| m.pose()) != Some(PoseSource::Slam) {
+        robot.slam = None;
+    }
+    let mut sim = Simulation::new(&s.world, &robot, plan.controller, settings)?;
     let (summary, wall) =
         drive(&mut sim, settings.dt, &mut NoObserver, stop).map_err(|e| match e {})?;
     let rays: f64 = plan

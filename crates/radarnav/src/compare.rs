@@ -90,6 +90,8 @@ pub fn robot_with_sensor(
         });
     }
     r.sensors.retain(|s| s.name == sensor);
+    // The experiments steer on the odometry: no localiser (its sensor index would be stale).
+    r.slam = None;
     Ok(r)
 }
 

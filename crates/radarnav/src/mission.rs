@@ -125,6 +125,16 @@ impl Mission {
         })
     }
 
+    /// The pose the mission steers on (`None` for teleop).
+    pub fn pose(&self) -> Option<PoseSource> {
+        match &self.kind {
+            MissionKind::Teleop(_) => None,
+            MissionKind::Waypoints(w) => Some(w.pose),
+            MissionKind::Bug(b) => Some(b.pose),
+            MissionKind::Explore(e) => Some(e.pose),
+        }
+    }
+
     /// A one-word name of the kind, as in files.
     pub fn kind_name(&self) -> &'static str {
         match &self.kind {

@@ -28,6 +28,7 @@ use thiserror::Error;
 
 use crate::Scenario;
 use crate::map::PoseSource;
+use crate::slam::SlamConfig;
 use crate::mission::{Mission, MissionError, MissionKind};
 use crate::nav::bug::{retry_safety, safety_floor};
 use crate::nav::{BugAlgorithm, BugMission, BumperSensor, read_first_echoes};
@@ -273,6 +274,12 @@ impl TrialMap {
         let first_bound = attempt_bound(g.start, g.standoff);
         let mut robot = self.robot.clone();
         robot.sensors = vec![self.sensors[trial.sensor as usize].clone()];
+        // On `slam` the trial's one sensor is the localiser's too: radar SLAM for a radar
+        // trial, laser SLAM for a laser one. Elsewhere none runs (it would cost time only).
+        robot.slam = (trial.pose == PoseSource::Slam).then(|| {
+            let c = self.robot.slam.unwrap_or(SlamConfig::for_sensor(0));
+            SlamConfig { sensor: 0, ..c }
+        });
         let mut bug = self.bug.clone();
         bug.algorithm = trial.algorithm;
         bug.pose = trial.pose;
