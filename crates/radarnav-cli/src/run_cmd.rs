@@ -16,10 +16,10 @@ use radarnav::mission::{MissionKind, TeleopSource, parse_teleop_csv};
 use radarnav::nav::{Idle, TeleopController};
 use radarnav::record::{RecordOptions, Recorder};
 use radarnav::scenario::Robot;
-use radarnav::slam::SlamConfig;
 use radarnav::sim::{
     Controller, NoObserver, Observer, RunSettings, RunSummary, ScanEvent, Simulation, Step,
 };
+use radarnav::slam::SlamConfig;
 
 /// What `run` and `bench --sim` share: which robot, which controller.
 pub struct Plan<'a> {
@@ -389,7 +389,10 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
             c.name, c.scans, c.rate_hz
         )?;
     }
-    let slam = summary.slam.as_ref().map(|s| format!("slam ({})", s.sensor));
+    let slam = summary
+        .slam
+        .as_ref()
+        .map(|s| format!("slam ({})", s.sensor));
     for (name, errors) in [
         (Some("odometry".to_owned()), &recorded.odometry_errors),
         (slam, &recorded.slam_errors),

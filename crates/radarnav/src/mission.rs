@@ -12,11 +12,11 @@
 use glam::DVec2;
 use thiserror::Error;
 
+use crate::map::PoseSource;
 use crate::nav::{
     BugController, BugMission, ExploreController, ExploreMission, TeleopController,
     WaypointController, WithRecoil,
 };
-use crate::map::PoseSource;
 use crate::sim::Controller;
 use crate::vehicle::DriveCommand;
 

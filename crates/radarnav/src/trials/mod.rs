@@ -28,7 +28,6 @@ use thiserror::Error;
 
 use crate::Scenario;
 use crate::map::PoseSource;
-use crate::slam::SlamConfig;
 use crate::mission::{Mission, MissionError, MissionKind};
 use crate::nav::bug::{retry_safety, safety_floor};
 use crate::nav::{BugAlgorithm, BugMission, BumperSensor, read_first_echoes};
@@ -37,6 +36,7 @@ use crate::render::RenderError;
 use crate::scenario::{MountedSensor, Robot};
 use crate::sensor::SensorKind;
 use crate::sim::{RunOutcome, RunSettings, SimError, Simulation};
+use crate::slam::SlamConfig;
 pub use geometry::{Expectation, SensorClass, TrialGeometry};
 
 /// Why a trial cannot run.
