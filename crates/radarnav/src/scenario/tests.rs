@@ -443,7 +443,7 @@ fn bug_and_explore_mission_errors_name_the_key() {
     let x = e("type = \"bug2\"\ngoal = [1, 1]\nfollow = \"up\"\n");
     assert_eq!((x.line, x.key.as_deref()), (13, Some("follow")));
     let x = e("type = \"bug2\"\ngoal = [1, 1]\npose = \"gps\"\n");
-    assert!(x.message.contains("`odometry` or `truth`"), "{x}");
+    assert!(x.message.contains("`odometry`, `slam` or `truth`"), "{x}");
     let x = e("explore = \"zigzag\"\n");
     assert_eq!((x.line, x.key.as_deref()), (11, Some("explore")));
     assert!(

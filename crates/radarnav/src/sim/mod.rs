@@ -14,6 +14,8 @@
 //! known pose: at each call the loop traces that batch on all cores and hands the scans out
 //! in order as the steps reach them (same draws, same scans as one by one). A scan's draws do
 //! not depend on its pose, so the next batch's are taken while a batch is traced.
+//! A robot with a localiser ([`crate::slam`]) registers each scan of its sensor as the scan is
+//! handed out, in time order; observers and controllers see its estimate beside the odometry.
 //! Every random draw comes from ChaCha8 streams of the run's seed: stream 0 for the odometry,
 //! stream `1 + i` for sensor `i`, so the same scenario and seed give the same run.
 

@@ -454,12 +454,12 @@ impl TriMesh {
         HITS.with_borrow_mut(|hits| {
             hits.clear();
             self.crossings(ray, hits);
-            self.intervals_of(hits, out);
+            self.intervals_of(ray, hits, out);
         });
     }
 
-    /// The intervals of `hits` (crossings of one line), appended to `out`.
-    fn intervals_of(&self, hits: &mut [Crossing], out: &mut Vec<(f64, f64)>) {
+    /// The intervals of `hits` (crossings of `ray`'s line), appended to `out`.
+    fn intervals_of(&self, ray: &Ray, hits: &mut [Crossing], out: &mut Vec<(f64, f64)>) {
         if hits.is_empty() {
             return;
         }
@@ -476,6 +476,7 @@ impl TriMesh {
         }
         let mut depth = 0i32;
         let mut entry = 0.0;
+        let mut balanced = true;
         for h in hits.iter() {
             if h.entering {
                 if depth == 0 {
@@ -490,8 +491,27 @@ impl TriMesh {
                         _ => out.push((entry, h.t)),
                     }
                 }
-                // Rounding can never leave the line outside more often than it entered.
+                balanced &= depth >= 0;
                 depth = depth.max(0);
+            }
+        }
+        if balanced && depth == 0 {
+            return;
+        }
+        // A line can never leave more often than it entered, and it ends outside. The
+        // watertight test counts a crossing once wherever the line goes *through* the surface;
+        // a line lying in the plane of a face and touching the solid only at that face's
+        // rim (a corner grazed) may get one crossing of the pair. Then each stretch between
+        // two crossings is classified by its midpoint instead (rare, so the extra cost is too).
+        out.truncate(start);
+        let mut ts: Vec<f64> = hits.iter().map(|h| h.t).collect();
+        ts.dedup();
+        for w in ts.windows(2) {
+            if self.contains(ray.at(0.5 * (w[0] + w[1]))) {
+                match out[start..].last_mut() {
+                    Some(last) if w[0] <= last.1 => last.1 = w[1],
+                    _ => out.push((w[0], w[1])),
+                }
             }
         }
     }
