@@ -16,6 +16,7 @@
 //! anchor_odometry⁻¹ ∘ odometry`, so every consumer (a controller at 10 Hz, a mapper placing a
 //! laser scan taken between two radar scans) gets a pose at any time.
 
+pub mod graph;
 pub mod likelihood;
 
 use glam::{DMat3, DVec2, DVec3};
