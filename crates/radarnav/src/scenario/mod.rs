@@ -755,6 +755,7 @@ fn slam_config(
         if let Some(t) = table {
             c.resolution = t.resolution.map_or(c.resolution, |v| v.0);
             c.max_range = t.max_range.map_or(c.max_range, |v| v.0);
+            c.loop_closure = t.loop_closure.unwrap_or(c.loop_closure);
         }
         c
     }))

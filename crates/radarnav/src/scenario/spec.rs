@@ -494,6 +494,8 @@ pub struct SlamSpec {
     pub resolution: Option<SlamResolution>,
     /// Farthest return used, m.
     pub max_range: Option<SlamRange>,
+    /// Whether it closes loops (default true).
+    pub loop_closure: Option<bool>,
 }
 
 /// `[robot.odometry]`.

@@ -18,6 +18,66 @@ pub const MAX_CELLS: usize = 1 << 26;
 /// The kernel reaches this many cell sizes from a surface (M = 0.011 there).
 const KERNEL_SIGMAS: f64 = 3.0;
 
+/// Where the line `y = yc` is within `r` of the segment `a`–`b`: an interval of x, as the
+/// set within `r` of a segment (a capsule) is convex; `None` if the line misses it.
+fn capsule_row(a: DVec2, b: DVec2, r: f64, yc: f64) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    // The discs at the ends.
+    for p in [a, b] {
+        let dy = yc - p.y;
+        if dy.abs() <= r {
+            let w = (r * r - dy * dy).sqrt();
+            (lo, hi) = (lo.min(p.x - w), hi.max(p.x + w));
+        }
+    }
+    // The band along the segment: |distance to its line| <= r and the projection on it in
+    // [0, L], each a slab in x.
+    let ab = b - a;
+    let len = ab.length();
+    if len > 0.0 {
+        let u = ab / len;
+        let dy = yc - a.y;
+        // s(x) = -(x - a.x) u.y + dy u.x, t(x) = (x - a.x) u.x + dy u.y.
+        let mut band = (f64::NEG_INFINITY, f64::INFINITY);
+        for (slope, offset, min, max) in [(-u.y, dy * u.x, -r, r), (u.x, dy * u.y, 0.0, len)] {
+            if slope.abs() < 1e-12 {
+                if offset < min || offset > max {
+                    band = (1.0, 0.0);
+                }
+            } else {
+                let (e0, e1) = ((min - offset) / slope, (max - offset) / slope);
+                band = (band.0.max(e0.min(e1)), band.1.min(e0.max(e1)));
+            }
+        }
+        if band.0 <= band.1 {
+            (lo, hi) = (lo.min(a.x + band.0), hi.max(a.x + band.1));
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// `d² / 2σ²` at the kernel's reach.
+const KERNEL_EXPONENT: f64 = KERNEL_SIGMAS * KERNEL_SIGMAS / 2.0;
+/// Entries of the kernel's table over `[0, KERNEL_EXPONENT]`.
+const KERNEL_TABLE: usize = 4096;
+
+/// `exp(-x)` for `x` in `[0, KERNEL_EXPONENT)`, from a table with linear interpolation (within
+/// 2e-7 of `exp`): a keyframe puts in tens of thousands of cells, and `exp` was two thirds of
+/// the localiser's time.
+fn kernel(x: f64) -> f32 {
+    static TABLE: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    let table = TABLE.get_or_init(|| {
+        (0..=KERNEL_TABLE + 1)
+            .map(|k| (-(k as f64) * KERNEL_EXPONENT / KERNEL_TABLE as f64).exp() as f32)
+            .collect()
+    });
+    let u = x * (KERNEL_TABLE as f64 / KERNEL_EXPONENT);
+    let k = u as usize;
+    let f = (u - k as f64) as f32;
+    table[k] + f * (table[k + 1] - table[k])
+}
+
 /// Margin added around a level's bounds when it grows, m.
 const GROW_MARGIN: f64 = 16.0;
 
@@ -110,6 +170,20 @@ impl Level {
         }
     }
 
+    /// The likelihood of the cell holding `p` (no interpolation: the cheap read of a
+    /// correlative search); 0 outside the level.
+    pub fn nearest(&self, p: DVec2) -> f64 {
+        let g = (p - self.origin) / self.res;
+        if !(g.x >= 0.0 && g.y >= 0.0) {
+            return 0.0;
+        }
+        let (i, j) = (g.x as usize, g.y as usize);
+        if i >= self.width || j >= self.height {
+            return 0.0;
+        }
+        f64::from(self.cells[j * self.width + i])
+    }
+
     /// Puts in the surface from `a` to `b` (a single return when they are equal); `false`
     /// if the level could not grow to hold it (up to [`MAX_CELLS`]).
     pub fn insert(&mut self, a: DVec2, b: DVec2) -> bool {
@@ -127,17 +201,34 @@ impl Level {
         let (ab, len2) = (b - a, (b - a).length_squared());
         let inv = 1.0 / (2.0 * self.res * self.res);
         for j in lo.y.max(0.0) as usize..=(hi.y as usize).min(self.height - 1) {
-            for i in lo.x.max(0.0) as usize..=(hi.x as usize).min(self.width - 1) {
+            // Only the row's cells within reach of the surface: the reach's capsule around
+            // it cuts the row's line of centres in one interval (a long slanted surface's
+            // bounding box is mostly out of reach).
+            let yc = self.origin.y + (j as f64 + 0.5) * self.res;
+            let Some((x0, x1)) = capsule_row(a, b, reach, yc) else {
+                continue;
+            };
+            let i0 = ((x0 - self.origin.x) / self.res - 0.5)
+                .ceil()
+                .max(lo.x)
+                .max(0.0) as usize;
+            let i1 = ((x1 - self.origin.x) / self.res - 0.5).floor().min(hi.x);
+            if i1 < 0.0 {
+                continue;
+            }
+            for i in i0..=(i1 as usize).min(self.width - 1) {
                 let c = self.origin + (DVec2::new(i as f64, j as f64) + 0.5) * self.res;
                 let t = if len2 > 0.0 {
                     ((c - a).dot(ab) / len2).clamp(0.0, 1.0)
                 } else {
                     0.0
                 };
-                let d2 = (c - (a + ab * t)).length_squared();
-                let m = (-d2 * inv).exp() as f32;
+                let x = (c - (a + ab * t)).length_squared() * inv;
+                if x >= KERNEL_EXPONENT {
+                    continue;
+                }
                 let cell = &mut self.cells[j * self.width + i];
-                *cell = cell.max(m);
+                *cell = cell.max(kernel(x));
             }
         }
         true
@@ -251,6 +342,55 @@ mod tests {
         let dx = (l.sample(p + DVec2::X * h).value - l.sample(p - DVec2::X * h).value) / (2.0 * h);
         let dy = (l.sample(p + DVec2::Y * h).value - l.sample(p - DVec2::Y * h).value) / (2.0 * h);
         assert!((s.gradient.x - dx).abs() < 1e-5 && (s.gradient.y - dy).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_row_is_cut_where_it_is_within_reach() {
+        // Against a brute-force scan of the row.
+        let cases = [
+            (DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.5)),
+            (DVec2::new(0.3, -0.2), DVec2::new(0.3, 0.9)),
+            (DVec2::new(-0.5, 0.1), DVec2::new(0.7, 0.1)),
+            (DVec2::new(0.2, 0.2), DVec2::new(0.2, 0.2)),
+        ];
+        for (a, b) in cases {
+            for k in 0..60 {
+                let yc = -0.6 + 0.0311 * f64::from(k);
+                let inside = |x: f64| {
+                    let p = DVec2::new(x, yc);
+                    let t = if a == b {
+                        0.0
+                    } else {
+                        ((p - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0)
+                    };
+                    (p - a.lerp(b, t)).length() <= 0.25
+                };
+                let xs: Vec<f64> = (0..4000).map(|i| -1.0 + 0.001 * f64::from(i)).collect();
+                let hit: Vec<f64> = xs.iter().copied().filter(|&x| inside(x)).collect();
+                match capsule_row(a, b, 0.25, yc) {
+                    None => assert!(hit.is_empty(), "{a} {b} {yc}"),
+                    Some((lo, hi)) => {
+                        assert!(
+                            (hit[0] - lo).abs() < 2e-3,
+                            "{a} {b} {yc}: {lo} vs {}",
+                            hit[0]
+                        );
+                        assert!(
+                            (hit.last().unwrap() - hi).abs() < 2e-3,
+                            "{a} {b} {yc}: {hi}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_kernel_table_is_exp() {
+        for k in 0..10_000 {
+            let x = KERNEL_EXPONENT * f64::from(k) / 10_000.0;
+            assert!((f64::from(kernel(x)) - (-x).exp()).abs() < 2e-7, "{x}");
+        }
     }
 
     #[test]

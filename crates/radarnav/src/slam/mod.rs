@@ -24,6 +24,7 @@ use serde::Serialize;
 
 use crate::pose::{Pose, wrap_angle};
 use crate::sensor::{HitKind, Scan};
+use graph::{Edge, PoseGraph};
 use likelihood::Level;
 
 /// How the localiser works.
@@ -41,6 +42,9 @@ pub struct SlamConfig {
     pub keyframe_distance: f64,
     /// ...or turned this much, rad.
     pub keyframe_angle: f64,
+    /// Whether keyframes are registered against old ones to close loops (with feature
+    /// `pose-graph`; without it the edges are kept but never solved).
+    pub loop_closure: bool,
 }
 
 impl SlamConfig {
@@ -56,6 +60,7 @@ impl SlamConfig {
             max_range: 30.0,
             keyframe_distance: 0.5,
             keyframe_angle: 15f64.to_radians(),
+            loop_closure: true,
         }
     }
 }
@@ -86,6 +91,34 @@ const JOIN_STEPS: f64 = 2.5;
 /// Scan planes steeper than this are not registered: the localiser is planar, m/m.
 const MAX_ELEVATION_SIN: f64 = 0.09;
 
+/// Standard deviations of a registration between two keyframes: m and rad.
+const EDGE_SIGMA: (f64, f64) = (0.03, 0.01);
+/// A loop closure is looked for every this many keyframes (about 4 m)...
+const LOOP_EVERY: usize = 8;
+/// ...against keyframes at least this many older (about 15 m of path)...
+const LOOP_GAP: usize = 30;
+/// ...and at most this far from it, m.
+const LOOP_RADIUS: f64 = 4.0;
+/// Keyframes either side of the old one that make its submap.
+const SUBMAP_KEYFRAMES: usize = 3;
+/// Search window of a loop closure around the current estimate: m either way, rad either way.
+const LOOP_WINDOW: (f64, f64) = (0.8, 0.14);
+/// Heading step of the search, rad (2°; the coarse level's Gauss–Newton takes it from there,
+/// as it takes the coarse cell).
+const LOOP_ANGLE_STEP: f64 = 0.035;
+/// Mean likelihood of the returns on the old submap that a loop closure needs.
+const LOOP_MIN_SCORE: f64 = 0.75;
+/// A loop closure further than this from the estimate (m, rad) makes the graph be solved.
+const SOLVE_BEYOND: (f64, f64) = (0.05, 0.01);
+
+/// A scan put into the map, in the robot frame: its returns that join no neighbour, and the
+/// surfaces joining the others.
+#[derive(Clone, Debug)]
+struct Keyframe {
+    points: Vec<DVec2>,
+    segments: Vec<(DVec2, DVec2)>,
+}
+
 /// The localiser's counters, for `summary.json`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct SlamStats {
@@ -95,6 +128,12 @@ pub struct SlamStats {
     pub refused: u64,
     /// Scans put into the map.
     pub keyframes: u64,
+    /// Keyframes registered against an old part of the map for a loop closure.
+    pub loop_searches: u64,
+    /// Loop closures accepted (edges added to the pose graph).
+    pub loop_closures: u64,
+    /// Times the pose graph was solved (and the map rebuilt).
+    pub graph_solves: u64,
     /// Mean likelihood of the registered scans' returns at their final poses.
     pub mean_score: f64,
 }
@@ -110,6 +149,12 @@ pub struct Localiser {
     anchor: (Pose, Pose),
     /// Where the last keyframe went in; `None` before the first.
     last_keyframe: Option<Pose>,
+    /// Every keyframe's returns (robot frame), in the graph's node order.
+    keyframes: Vec<Keyframe>,
+    /// The keyframes' poses and the registrations between them.
+    graph: PoseGraph,
+    /// Keyframes since the last loop closure.
+    since_closure: usize,
     /// The current scan's returns in the robot frame.
     points: Vec<DVec2>,
     /// Neighbouring returns of the current scan, joined (robot frame).
@@ -122,21 +167,22 @@ impl Localiser {
     /// A localiser for a robot starting at `start` (where its odometry starts too), its sensor
     /// mounted at `mount`.
     pub fn new(config: SlamConfig, mount: Pose, start: Pose) -> Self {
-        let half = config.max_range.min(50.0) + 2.0;
-        let levels = (0..config.levels.max(1))
-            .map(|l| Level::new(config.resolution * f64::from(1u32 << l), start.xy(), half))
-            .collect();
-        Self {
+        let mut me = Self {
             config,
             mount,
-            levels,
+            levels: Vec::new(),
             anchor: (start, start),
             last_keyframe: None,
+            keyframes: Vec::new(),
+            graph: PoseGraph::default(),
+            since_closure: 0,
             points: Vec::new(),
             segments: Vec::new(),
             stats: SlamStats::default(),
             score_sum: 0.0,
-        }
+        };
+        me.levels = me.new_levels(start.xy());
+        me
     }
 
     /// The settings.
@@ -175,7 +221,7 @@ impl Localiser {
             // The first scan makes the map: the start pose is the frame.
             predicted
         } else {
-            let (pose, score) = self.match_scan(&predicted);
+            let (pose, score) = self.match_scan(&self.levels, &predicted);
             let d = pose.xy() - predicted.xy();
             if d.length() > MAX_CORRECTION.0
                 || wrap_angle(pose.yaw - predicted.yaw).abs() > MAX_CORRECTION.1
@@ -194,11 +240,10 @@ impl Localiser {
                 || wrap_angle(pose.yaw - k.yaw).abs() >= self.config.keyframe_angle
         });
         if due && self.points.len() >= MIN_POINTS {
-            self.insert(&pose);
-            self.last_keyframe = Some(pose);
-            self.stats.keyframes += 1;
+            self.add_keyframe(pose);
         }
-        pose
+        // A loop closure may have moved the estimate since.
+        self.anchor.0
     }
 
     /// The scan's usable returns in the robot frame, thinned to about one per finest cell.
@@ -247,19 +292,139 @@ impl Localiser {
         }
     }
 
-    /// Puts the current returns, and the surfaces joining neighbours, into every level at
+    /// Puts a keyframe's returns, and the surfaces joining neighbours, into every level at
     /// `pose`.
-    fn insert(&mut self, pose: &Pose) {
+    fn insert(levels: &mut [Level], keyframe: &Keyframe, pose: &Pose) {
         let (s, c) = pose.yaw.sin_cos();
         let world = |p: DVec2| DVec2::new(pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y);
-        for level in &mut self.levels {
-            for p in &self.points {
+        for level in levels {
+            for p in &keyframe.points {
                 level.insert(world(*p), world(*p));
             }
-            for &(a, b) in &self.segments {
+            for &(a, b) in &keyframe.segments {
                 level.insert(world(a), world(b));
             }
         }
+    }
+
+    /// Empty levels around `centre`.
+    fn new_levels(&self, centre: DVec2) -> Vec<Level> {
+        let half = self.config.max_range.min(50.0) + 2.0;
+        (0..self.config.levels.max(1))
+            .map(|l| Level::new(self.config.resolution * f64::from(1u32 << l), centre, half))
+            .collect()
+    }
+
+    /// Adds the current scan as keyframe `pose` to the map and the graph, and looks for a
+    /// loop closure.
+    fn add_keyframe(&mut self, pose: Pose) {
+        // A return that ends a joined surface is in the map with it already.
+        let ends: std::collections::HashSet<[u64; 2]> = (self.segments.iter())
+            .flat_map(|(a, b)| [a, b].map(|p| [p.x.to_bits(), p.y.to_bits()]))
+            .collect();
+        let keyframe = Keyframe {
+            points: (self.points.iter().copied())
+                .filter(|p| !ends.contains(&[p.x.to_bits(), p.y.to_bits()]))
+                .collect(),
+            segments: self.segments.clone(),
+        };
+        Self::insert(&mut self.levels, &keyframe, &pose);
+        self.keyframes.push(keyframe);
+        let i = self.graph.nodes.len();
+        self.graph.nodes.push(pose);
+        if i > 0 {
+            self.graph.edges.push(Edge {
+                from: i - 1,
+                to: i,
+                relative: self.graph.nodes[i - 1].inverse().compose(&pose),
+                sigma_xy: EDGE_SIGMA.0,
+                sigma_yaw: EDGE_SIGMA.1,
+            });
+        }
+        self.last_keyframe = Some(pose);
+        self.stats.keyframes += 1;
+        self.since_closure += 1;
+        if self.config.loop_closure && self.since_closure >= LOOP_EVERY {
+            self.close_loop(i);
+        }
+    }
+
+    /// Registers keyframe `i` against the submap of the nearest keyframe at least
+    /// [`LOOP_GAP`] keyframes older within [`LOOP_RADIUS`]: a search over a window wider than
+    /// tracking's basin (the drift since the robot was last here), then Gauss–Newton. An
+    /// accepted match becomes an edge; if it disagrees with the estimate, the graph is solved,
+    /// the keyframes move and the map is rebuilt from them.
+    fn close_loop(&mut self, i: usize) {
+        let Some(newest_old) = i.checked_sub(LOOP_GAP) else {
+            return;
+        };
+        let here = self.graph.nodes[i];
+        let Some(j) = (0..=newest_old)
+            .map(|j| (j, (self.graph.nodes[j].xy() - here.xy()).length()))
+            .filter(|&(_, d)| d <= LOOP_RADIUS)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(j, _)| j)
+        else {
+            return;
+        };
+        self.stats.loop_searches += 1;
+        let mut submap = self.new_levels(self.graph.nodes[j].xy());
+        for k in j.saturating_sub(SUBMAP_KEYFRAMES)..=(j + SUBMAP_KEYFRAMES).min(newest_old) {
+            Self::insert(&mut submap, &self.keyframes[k], &self.graph.nodes[k]);
+        }
+        // The current keyframe's returns are still in `points`.
+        let coarse = submap.last().expect("levels");
+        let step = coarse.resolution();
+        let reach = (LOOP_WINDOW.0 / step).round() as i32;
+        let turns = (LOOP_WINDOW.1 / LOOP_ANGLE_STEP).round() as i32;
+        let mut best = (f64::NEG_INFINITY, here);
+        for a in -turns..=turns {
+            for dx in -reach..=reach {
+                for dy in -reach..=reach {
+                    let p = Pose::new(
+                        here.x + f64::from(dx) * step,
+                        here.y + f64::from(dy) * step,
+                        0.0,
+                        here.yaw + f64::from(a) * LOOP_ANGLE_STEP,
+                    );
+                    let s = self.score(coarse, &p, Level::nearest);
+                    if s > best.0 {
+                        best = (s, p);
+                    }
+                }
+            }
+        }
+        let (matched, score) = self.match_scan(&submap, &best.1);
+        if score < LOOP_MIN_SCORE {
+            return;
+        }
+        self.since_closure = 0;
+        self.stats.loop_closures += 1;
+        self.graph.edges.push(Edge {
+            from: j,
+            to: i,
+            relative: self.graph.nodes[j].inverse().compose(&matched),
+            sigma_xy: EDGE_SIGMA.0,
+            sigma_yaw: EDGE_SIGMA.1,
+        });
+        let off = (matched.xy() - here.xy()).length();
+        if off < SOLVE_BEYOND.0 && wrap_angle(matched.yaw - here.yaw).abs() < SOLVE_BEYOND.1 {
+            return;
+        }
+        let Some(solved) = self.graph.solve() else {
+            return;
+        };
+        self.stats.graph_solves += 1;
+        // The latest keyframe's correction carries the anchor and the last keyframe along.
+        let correction = solved[i].compose(&here.inverse());
+        self.anchor.0 = correction.compose(&self.anchor.0);
+        self.last_keyframe = Some(solved[i]);
+        self.graph.nodes = solved;
+        let mut levels = self.new_levels(self.graph.nodes[0].xy());
+        for (k, p) in self.keyframes.iter().zip(&self.graph.nodes) {
+            Self::insert(&mut levels, k, p);
+        }
+        self.levels = levels;
     }
 
     /// Gauss–Newton from `predicted`, coarse level to fine; the pose and the mean likelihood
@@ -267,14 +432,14 @@ impl Localiser {
     /// does, up to [`HALVINGS`] times): on the likelihood's peaks the residuals do not reach 0
     /// (the interpolated peak is below 1) while their gradients do, so plain Gauss–Newton
     /// would leap away from the optimum it sits on.
-    fn match_scan(&self, predicted: &Pose) -> (Pose, f64) {
+    fn match_scan(&self, levels: &[Level], predicted: &Pose) -> (Pose, f64) {
         let info = DVec3::new(
             PRIOR_SIGMA.0.powi(-2),
             PRIOR_SIGMA.0.powi(-2),
             PRIOR_SIGMA.1.powi(-2),
         );
         let mut xi = DVec3::new(predicted.x, predicted.y, predicted.yaw);
-        for level in self.levels.iter().rev() {
+        for level in levels.iter().rev() {
             let mut here = self.normal_equations(level, xi, predicted, info);
             for _ in 0..ITERATIONS {
                 let (_, h, g) = here;
@@ -303,22 +468,22 @@ impl Localiser {
             }
         }
         let pose = Pose::new(xi.x, xi.y, 0.0, wrap_angle(xi.z));
-        let (s, c) = pose.yaw.sin_cos();
-        let finest = &self.levels[0];
-        let score = self
-            .points
-            .iter()
-            .map(|p| {
-                finest
-                    .sample(DVec2::new(
-                        pose.x + c * p.x - s * p.y,
-                        pose.y + s * p.x + c * p.y,
-                    ))
-                    .value
-            })
-            .sum::<f64>()
-            / self.points.len() as f64;
+        let score = self.score(&levels[0], &pose, |l, w| l.sample(w).value);
         (pose, score)
+    }
+
+    /// The mean of `read` over the current returns moved by `pose` onto `level`.
+    fn score(&self, level: &Level, pose: &Pose, read: impl Fn(&Level, DVec2) -> f64) -> f64 {
+        let (s, c) = pose.yaw.sin_cos();
+        let sum: f64 = (self.points.iter())
+            .map(|p| {
+                read(
+                    level,
+                    DVec2::new(pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y),
+                )
+            })
+            .sum();
+        sum / self.points.len().max(1) as f64
     }
 
     /// The cost `Σ ρ(1 - M) + prior` (ρ the Cauchy loss) at pose `xi` (x, y, yaw) on `level`, and the Gauss–Newton
