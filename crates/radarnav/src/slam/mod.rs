@@ -93,6 +93,9 @@ const MAX_ELEVATION_SIN: f64 = 0.09;
 
 /// Standard deviations of a registration between two keyframes: m and rad.
 const EDGE_SIGMA: (f64, f64) = (0.03, 0.01);
+/// Standard deviations of an edge across a refused scan, m and rad: the odometry's error over
+/// a keyframe's distance, generously (a wheel slip included).
+const ODOMETRY_EDGE_SIGMA: (f64, f64) = (0.5, 0.1);
 /// A loop closure is looked for every this many keyframes (about 4 m)...
 const LOOP_EVERY: usize = 8;
 /// ...against keyframes at least this many older (about 15 m of path)...
@@ -155,6 +158,9 @@ pub struct Localiser {
     graph: PoseGraph,
     /// Keyframes since the last loop closure.
     since_closure: usize,
+    /// Whether a scan since the last keyframe went unregistered (the odometry alone moved
+    /// the estimate).
+    unregistered: bool,
     /// The current scan's returns in the robot frame.
     points: Vec<DVec2>,
     /// Neighbouring returns of the current scan, joined (robot frame).
@@ -176,6 +182,7 @@ impl Localiser {
             keyframes: Vec::new(),
             graph: PoseGraph::default(),
             since_closure: 0,
+            unregistered: false,
             points: Vec::new(),
             segments: Vec::new(),
             stats: SlamStats::default(),
@@ -216,6 +223,7 @@ impl Localiser {
         self.collect_points(scan);
         let pose = if self.points.len() < MIN_POINTS {
             self.stats.refused += 1;
+            self.unregistered = true;
             predicted
         } else if self.last_keyframe.is_none() {
             // The first scan makes the map: the start pose is the frame.
@@ -227,6 +235,7 @@ impl Localiser {
                 || wrap_angle(pose.yaw - predicted.yaw).abs() > MAX_CORRECTION.1
             {
                 self.stats.refused += 1;
+                self.unregistered = true;
                 predicted
             } else {
                 self.stats.registered += 1;
@@ -333,14 +342,22 @@ impl Localiser {
         let i = self.graph.nodes.len();
         self.graph.nodes.push(pose);
         if i > 0 {
+            // Since the last keyframe only the odometry may have moved the estimate (a scan
+            // refused): the edge is as uncertain as the odometry.
+            let (sigma_xy, sigma_yaw) = if self.unregistered {
+                ODOMETRY_EDGE_SIGMA
+            } else {
+                EDGE_SIGMA
+            };
             self.graph.edges.push(Edge {
                 from: i - 1,
                 to: i,
                 relative: self.graph.nodes[i - 1].inverse().compose(&pose),
-                sigma_xy: EDGE_SIGMA.0,
-                sigma_yaw: EDGE_SIGMA.1,
+                sigma_xy,
+                sigma_yaw,
             });
         }
+        self.unregistered = false;
         self.last_keyframe = Some(pose);
         self.stats.keyframes += 1;
         self.since_closure += 1;

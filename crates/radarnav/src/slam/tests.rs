@@ -149,3 +149,50 @@ fn a_scan_without_returns_is_refused_and_the_odometry_kept() {
     assert!((e.xy() - odo.xy()).length() < 1e-12 && (e.yaw - odo.yaw).abs() < 1e-12);
     assert_eq!(slam.stats().refused, 1);
 }
+
+#[test]
+fn a_loop_closure_undoes_a_jump_that_tracking_refused() {
+    // Two laps; at the start of the second the odometry jumps 0.7 m sideways (a wheel slip):
+    // more than tracking may correct, so the estimate carries the jump on the odometry's
+    // word, until the second lap's keyframes are registered against the first lap's.
+    let lap = lap();
+    let mut truth = lap.clone();
+    truth.extend_from_slice(&lap[1..]);
+    let sc = Scenario::builtin("foliage-wall").unwrap();
+    let mounted = &sc.robots[0].sensors[0];
+    let run = |loop_closure: bool| {
+        let config = SlamConfig {
+            loop_closure,
+            ..SlamConfig::for_sensor(0)
+        };
+        let mut slam = Localiser::new(config, mounted.mount, truth[0]);
+        let (mut rng, mut tracer) = (ChaCha8Rng::seed_from_u64(5), Tracer::default());
+        let mut odometry = truth[0];
+        let mut last = 0.0;
+        for (k, t) in truth.iter().enumerate() {
+            if k > 0 {
+                odometry = odometry.compose(&truth[k - 1].inverse().compose(t));
+            }
+            if k == lap.len() {
+                odometry = odometry.compose(&Pose::new(0.0, 0.7, 0.0, 0.0));
+            }
+            let pose = t.compose(&mounted.mount);
+            let scan =
+                (mounted.config).scan(&sc.world, &pose, k as f64 * 0.25, &mut rng, &mut tracer);
+            let est = slam.register(&scan, &odometry);
+            last = (est.xy() - t.xy()).length();
+        }
+        (last, slam.stats())
+    };
+    let (without, _) = run(false);
+    let (with, stats) = run(true);
+    assert!(
+        without > 0.5,
+        "without loop closures the jump stays: {without} m"
+    );
+    assert!(with < 0.1, "with them it is undone: {with} m, {stats:?}");
+    assert!(
+        stats.loop_closures > 0 && stats.graph_solves > 0,
+        "{stats:?}"
+    );
+}
