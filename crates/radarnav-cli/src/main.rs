@@ -686,6 +686,7 @@ fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
     }
     say!("figures written to {}", out.display());
     map_demo(&s, seed, out)?;
+    slam_demo(seed, out)?;
     bug_demo(seed, out)?;
     signal_demo::signal_demo(out, seed)
 }
@@ -756,6 +757,7 @@ fn map_demo(s: &Scenario, seed: u64, out: &Path) -> Result<()> {
             robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
             region: Some(radarnav::render::world_region(&s.world)),
             marks: None,
+            estimates: &[],
         };
         export::write_all(m.mapper.grid(), out, stem, &title, 900, &overlay)?;
     }
@@ -763,6 +765,65 @@ fn map_demo(s: &Scenario, seed: u64, out: &Path) -> Result<()> {
         "maps written to {} (map_*.png in the thesis' palette, .pgm/.yaml for ROS map_server, .npy raw log-odds)",
         out.display()
     );
+    Ok(())
+}
+
+/// The thesis' figure 15 made its way, with SLAM: the foliage-wall loop on a drifting odometry
+/// (`slam/foliage-wall-loop`), steered on the radar localiser's pose, and the radar map built on
+/// that pose, with the true, odometry and SLAM paths over it; beside it the radar map on the
+/// true pose and on the odometry.
+fn slam_demo(seed: u64, out: &Path) -> Result<()> {
+    use radarnav::map::{PoseSource, export};
+    let s = Scenario::builtin("slam/foliage-wall-loop").context("built-in scenario")?;
+    let maps = [
+        (PoseSource::Slam, "fig15_radar_slam"),
+        (PoseSource::Truth, "map_radar_loop_truth"),
+        (PoseSource::Odometry, "map_radar_loop_odometry"),
+    ];
+    let specs: Vec<(&str, PoseSource)> = maps.iter().map(|m| ("radar", m.0)).collect();
+    let e = radarnav::demo::mapping_experiment(&s, seed, &specs, 0.05)?;
+    let robot = s.robot(None).context("the scenario has a robot")?;
+    let slam = e
+        .summary
+        .slam
+        .as_ref()
+        .context("the robot runs a localiser")?;
+    say!("");
+    say!(
+        "slam/foliage-wall-loop: {:.0} s looped on a drifting odometry, steering on radar SLAM ({:.1} m, {} bumps); end error odometry {:.2} m, SLAM {:.3} m:",
+        e.summary.duration,
+        e.summary.distance,
+        e.summary.bumps,
+        e.summary.odometry_error,
+        slam.error
+    );
+    let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
+    for (m, (pose, stem)) in e.maps.iter().zip(maps) {
+        say!(
+            "  radar map on {:<9} hidden area clear {:>6}, obstacle precision {:>6}",
+            pose.as_str(),
+            pct(m.scores.hidden_coverage),
+            pct(m.scores.obstacle_precision)
+        );
+        let title = format!(
+            "radar map on the {} pose: hidden {}, obst. prec. {}",
+            pose.as_str(),
+            pct(m.scores.hidden_coverage),
+            pct(m.scores.obstacle_precision)
+        );
+        let estimates = [
+            (e.odometry_path.as_slice(), [200, 60, 40], "odometry"),
+            (e.slam_path.as_slice(), [150, 40, 190], "radar SLAM"),
+        ];
+        let overlay = export::Overlay {
+            path: &e.path,
+            robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
+            region: Some(radarnav::render::world_region(&s.world)),
+            marks: None,
+            estimates: &estimates,
+        };
+        export::write_all(m.mapper.grid(), out, stem, &title, 900, &overlay)?;
+    }
     Ok(())
 }
 
@@ -829,6 +890,7 @@ fn bug_demo(seed: u64, out: &Path) -> Result<()> {
             robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
             region: Some(radarnav::render::world_region(&s.world)),
             marks: Some((&goal, "goal")),
+            estimates: &[],
         };
         export::write_all(
             m.mapper.grid(),

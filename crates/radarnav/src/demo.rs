@@ -215,18 +215,26 @@ pub struct MappingExperiment {
     pub summary: RunSummary,
     /// The true path, a point per centimetre or more.
     pub path: Vec<glam::DVec2>,
+    /// The odometry's path, likewise.
+    pub odometry_path: Vec<glam::DVec2>,
+    /// The localiser's path, likewise (empty when the robot runs none).
+    pub slam_path: Vec<glam::DVec2>,
     /// Each map, in the order asked.
     pub maps: Vec<MapResult>,
 }
 
-/// Collects the true path of a run.
+/// Collects the true, odometry and localiser paths of a run.
 #[derive(Default)]
-struct PathLog(Trail);
+struct PathLog(Trail, Trail, Trail);
 
 impl Observer for PathLog {
     type Error = std::convert::Infallible;
     fn on_step(&mut self, s: &Step) -> Result<(), Self::Error> {
         self.0.push(&s.truth);
+        self.1.push(&s.odometry);
+        if let Some(p) = &s.slam {
+            self.2.push(p);
+        }
         Ok(())
     }
 }
@@ -270,6 +278,10 @@ pub fn mapping_experiment(
         Err(never) => match never {},
     };
     path.0.end(&summary.final_pose);
+    path.1.end(&summary.final_odometry);
+    if let Some(s) = &summary.slam {
+        path.2.end(&s.final_pose);
+    }
     let scores = score_maps(&scenario.world, robot.vehicle, &robot.start, &mappers);
     let out = mappers
         .into_iter()
@@ -279,6 +291,8 @@ pub fn mapping_experiment(
     Ok(MappingExperiment {
         summary,
         path: path.0.points(),
+        odometry_path: path.1.points(),
+        slam_path: path.2.points(),
         maps: out,
     })
 }

@@ -63,6 +63,9 @@ pub struct Overlay<'a> {
     pub region: Option<(DVec2, DVec2)>,
     /// Points to mark with a labelled cross (a navigation goal).
     pub marks: Option<(&'a [DVec2], &'a str)>,
+    /// Estimated paths drawn over the true one, each with its colour and legend label (the
+    /// odometry's, the localiser's).
+    pub estimates: &'a [(&'a [DVec2], [u8; 3], &'a str)],
 }
 
 /// The map as a figure in the thesis' palette (cells outside the grid are unknown).
@@ -98,6 +101,11 @@ pub fn figure(
     }
     if overlay.path.len() > 1 {
         fig.draw_path(overlay.path, [20, 160, 60], 2.0, "path");
+    }
+    for &(path, colour, label) in overlay.estimates {
+        if path.len() > 1 {
+            fig.draw_path(path, colour, 1.5, label);
+        }
     }
     if let Some((vehicle, start, end)) = overlay.robot {
         fig.draw_robot(&start, vehicle);

@@ -632,6 +632,7 @@ impl<'w> Recorder<'w> {
                 robot: Some((robot.vehicle, robot.start, summary.final_pose)),
                 region: Some(world_region(&scenario.world)),
                 marks: None,
+                estimates: &[],
             };
             let stem = format!("map_{}", m.name());
             self.written.extend(export::write_all(

@@ -43,6 +43,18 @@ pub const BUILTIN_SCENARIOS: &[(&str, &str)] = &[
         "bug-spiral",
         include_str!("../../../../scenarios/bug-spiral.toml"),
     ),
+    (
+        "slam/foliage-wall-loop",
+        include_str!("../../../../scenarios/slam/foliage-wall-loop.toml"),
+    ),
+    (
+        "slam/smoke-room-drift",
+        include_str!("../../../../scenarios/slam/smoke-room-drift.toml"),
+    ),
+    (
+        "slam/bug-spiral-drift",
+        include_str!("../../../../scenarios/slam/bug-spiral-drift.toml"),
+    ),
 ];
 
 /// (name, TOML source) of the navigation trial maps (`scenarios/nav/`, DESIGN §6): each a
