@@ -316,8 +316,10 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
         settings.duration, settings.dt
     );
     a.budget.check_output(&what, need)?;
-    a.budget
-        .check_memory(&what, budget::path_memory(&robot, settings.duration))?;
+    a.budget.check_memory(
+        &what,
+        budget::path_memory(&s.world, &robot, settings.duration),
+    )?;
     if plan.mission == "explore" {
         track_coverage(
             &s.world,

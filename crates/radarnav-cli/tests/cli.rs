@@ -410,6 +410,7 @@ fn run_writes_every_file_and_is_deterministic() {
             "run.mcap",
             "scans/laser.rnscan",
             "scans/radar.rnscan",
+            "slam.tum",
             "summary.json",
             "trajectory.csv",
             "truth.tum"
@@ -473,7 +474,7 @@ fn run_with_a_teleop_csv_and_clear_errors() {
         (&["--maps", "radar,radar"], "names the map `radar` twice"),
         (
             &["--map-pose", "gps"],
-            "--map-pose `gps`: expected `truth` or `odometry`",
+            "--map-pose `gps`: expected `truth`, `odometry` or `slam`",
         ),
         (&["--maps", "radar+radar"], "names the sensor `radar` twice"),
     ] {

@@ -196,9 +196,30 @@ fn refuse_over(
 }
 
 /// Bytes of the driven paths a run keeps for its figures and the MCAP path: the true and the
-/// odometry path, a pose (32 bytes) per centimetre or more, at the vehicle's top speed.
-pub fn path_memory(robot: &Robot, duration: f64) -> f64 {
-    2.0 * 32.0 * (duration * robot.vehicle.max_speed / 0.01 + 2.0)
+/// odometry path, a pose (32 bytes) per centimetre or more, at the vehicle's top speed; and
+/// the localiser's, if the robot runs one: its keyframes (a return's point and a joining
+/// surface per ray, 48 bytes, every keyframe distance at top speed) and its likelihood levels
+/// (4 bytes a cell), which cover at most the returns (all on the world's objects) and the
+/// start, with the margin they grow by, up to [`crate::slam::likelihood::MAX_CELLS`] each.
+pub fn path_memory(world: &World, robot: &Robot, duration: f64) -> f64 {
+    let paths = 2.0 * 32.0 * (duration * robot.vehicle.max_speed / 0.01 + 2.0);
+    let slam = robot.slam.map_or(0.0, |c| {
+        let rays = robot.sensors.get(c.sensor).map_or(0.0, |s| {
+            (s.config.azimuth_count() * s.config.elevations.len()) as f64
+        });
+        let keyframes = duration * robot.vehicle.max_speed / c.keyframe_distance + 1.0;
+        let (lo, hi) = map_region(world, robot, 0.0, 0.0);
+        let reach = c.max_range.min(50.0) + 2.0 + crate::slam::likelihood::GROW_MARGIN;
+        let side = (hi - lo) + DVec2::splat(2.0 * reach);
+        let levels: f64 = (0..c.levels)
+            .map(|l| {
+                let res = c.resolution * f64::from(1u32 << l.min(30));
+                (side.x / res * side.y / res).min(crate::slam::likelihood::MAX_CELLS as f64)
+            })
+            .sum();
+        48.0 * rays * keyframes + 4.0 * levels
+    });
+    paths + slam
 }
 
 /// What a recording holds, for [`run_output`].
@@ -228,10 +249,11 @@ pub fn run_output(robot: &Robot, r: &Recording) -> f64 {
     let steps = (r.duration / r.dt).ceil() + 2.0;
     let mcap = f64::from(u8::from(r.mcap));
     let bag = f64::from(u8::from(r.ros2_bag));
-    // A row of trajectory.csv, and a line of truth.tum and of odometry.tum.
+    // A row of trajectory.csv, and a line of truth.tum, odometry.tum and slam.tum.
     const TUM_LINE_BYTES: f64 = 100.0;
+    let tum_files = if robot.slam.is_some() { 3.0 } else { 2.0 };
     let mut bytes =
-        steps * (120.0 + 2.0 * TUM_LINE_BYTES + mcap * STEP_BYTES + bag * BAG_STEP_BYTES);
+        steps * (120.0 + tum_files * TUM_LINE_BYTES + mcap * STEP_BYTES + bag * BAG_STEP_BYTES);
     for s in &robot.sensors {
         let c = &s.config;
         let rays = (c.azimuth_count() * c.elevations.len()) as f64;
@@ -293,9 +315,12 @@ mod tests {
         let s = Scenario::builtin("foliage-wall").unwrap();
         let robot = s.robot(None).unwrap();
         let b = Budget::default();
-        assert!(b.check_memory("paths", path_memory(robot, 3600.0)).is_ok());
+        assert!(
+            b.check_memory("paths", path_memory(&s.world, robot, 3600.0))
+                .is_ok()
+        );
         let e = b
-            .check_memory("paths", path_memory(robot, 1e6))
+            .check_memory("paths", path_memory(&s.world, robot, 1e6))
             .unwrap_err();
         assert!(e.to_string().contains("--max-memory"), "{e}");
     }

@@ -79,7 +79,7 @@ fn kernel(x: f64) -> f32 {
 }
 
 /// Margin added around a level's bounds when it grows, m.
-const GROW_MARGIN: f64 = 16.0;
+pub const GROW_MARGIN: f64 = 16.0;
 
 /// One resolution of the map.
 #[derive(Clone, Debug)]
