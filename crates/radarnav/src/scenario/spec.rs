@@ -494,7 +494,7 @@ pub struct SlamSpec {
     pub resolution: Option<SlamResolution>,
     /// Farthest return used, m.
     pub max_range: Option<SlamRange>,
-    /// Whether it closes loops (default true).
+    /// Whether it closes loops (default false).
     pub loop_closure: Option<bool>,
 }
 

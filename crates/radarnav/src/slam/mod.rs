@@ -42,8 +42,8 @@ pub struct SlamConfig {
     pub keyframe_distance: f64,
     /// ...or turned this much, rad.
     pub keyframe_angle: f64,
-    /// Whether keyframes are registered against old ones to close loops (with feature
-    /// `pose-graph`; without it the edges are kept but never solved).
+    /// Whether keyframes are registered against old ones to close loops (default off; with
+    /// feature `pose-graph`; without it the edges are kept but never solved).
     pub loop_closure: bool,
 }
 
@@ -60,7 +60,10 @@ impl SlamConfig {
             max_range: 30.0,
             keyframe_distance: 0.5,
             keyframe_angle: 15f64.to_radians(),
-            loop_closure: true,
+            // Off by default: in a long corridor, closures against keyframes further along it
+            // match as well (the nav trials' l-corridor: 3 of 28 laser runs over the path
+            // bound with them, none of 4 tried without); see `degenerate`.
+            loop_closure: false,
         }
     }
 }
@@ -111,6 +114,9 @@ const LOOP_WINDOW: (f64, f64) = (0.8, 0.14);
 const LOOP_ANGLE_STEP: f64 = 0.035;
 /// Mean likelihood of the returns on the old submap that a loop closure needs.
 const LOOP_MIN_SCORE: f64 = 0.75;
+/// A loop closure's returns must constrain the position in its weakest direction at least this
+/// fraction as much as in its strongest (the eigenvalues of the normal matrix's position block).
+const LOOP_MIN_CONSTRAINT: f64 = 0.1;
 /// A loop closure further than this from the estimate (m, rad) makes the graph be solved.
 const SOLVE_BEYOND: (f64, f64) = (0.05, 0.01);
 
@@ -412,7 +418,7 @@ impl Localiser {
             }
         }
         let (matched, score) = self.match_scan(&submap, &best.1);
-        if score < LOOP_MIN_SCORE {
+        if score < LOOP_MIN_SCORE || self.degenerate(&submap[0], &matched) {
             return;
         }
         self.since_closure = 0;
@@ -487,6 +493,21 @@ impl Localiser {
         let pose = Pose::new(xi.x, xi.y, 0.0, wrap_angle(xi.z));
         let score = self.score(&levels[0], &pose, |l, w| l.sample(w).value);
         (pose, score)
+    }
+
+    /// Whether the current returns at `pose` on `level` pin the position down in one direction
+    /// only (a corridor's walls: any shift along it matches as well). Tracking has the odometry
+    /// for that direction; a loop closure has nothing, and one along a corridor is as likely
+    /// to be a place further on as this one.
+    fn degenerate(&self, level: &Level, pose: &Pose) -> bool {
+        let xi = DVec3::new(pose.x, pose.y, pose.yaw);
+        let (_, h, _) = self.normal_equations(level, xi, pose, DVec3::ZERO);
+        // The eigenvalues of the position block.
+        let (a, b, c) = (h.x_axis.x, h.y_axis.x, h.y_axis.y);
+        let mean = (a + c) / 2.0;
+        let spread = (((a - c) / 2.0).powi(2) + b * b).sqrt();
+        let (low, high) = (mean - spread, mean + spread);
+        !(high > 0.0 && low >= LOOP_MIN_CONSTRAINT * high)
     }
 
     /// The mean of `read` over the current returns moved by `pose` onto `level`.
