@@ -116,7 +116,7 @@ const LOOP_ANGLE_STEP: f64 = 0.035;
 const LOOP_MIN_SCORE: f64 = 0.75;
 /// A loop closure's returns must constrain the position in its weakest direction at least this
 /// fraction as much as in its strongest (the eigenvalues of the normal matrix's position block).
-const LOOP_MIN_CONSTRAINT: f64 = 0.1;
+const LOOP_MIN_CONSTRAINT: f64 = 0.2;
 /// A loop closure further than this from the estimate (m, rad) makes the graph be solved.
 const SOLVE_BEYOND: (f64, f64) = (0.05, 0.01);
 
