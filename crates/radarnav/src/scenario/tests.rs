@@ -606,3 +606,27 @@ fn mesh_errors_name_the_file_the_part_and_the_key() {
     .unwrap_err();
     assert!(e.message.contains("0.0001 to 10000"), "{e}");
 }
+
+#[test]
+fn the_localiser_defaults_to_the_first_radar_and_its_table_is_checked() {
+    let s = parse(SENSING).unwrap();
+    let c = s.robots[0].slam.expect("a localiser by default");
+    assert_eq!((c.sensor, c.resolution, c.loop_closure), (0, 0.05, false));
+    let with = |table: &str| parse(&format!("{SENSING}[robot.slam]\n{table}"));
+    let c = with("sensor = \"laser\"\nresolution = 0.1\nloop_closure = true\n")
+        .unwrap()
+        .robots[0]
+        .slam
+        .unwrap();
+    assert_eq!((c.sensor, c.resolution, c.loop_closure), (1, 0.1, true));
+    assert_eq!(with("enabled = false\n").unwrap().robots[0].slam, None);
+    let e = with("sensor = \"sonar\"\n").unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("sensor"));
+    assert!(e.message.contains("has no sensor `sonar`"), "{e}");
+    let e = with("resolution = 5.0\n").unwrap_err();
+    assert!(e.to_string().contains("resolution"), "{e}");
+    let e = with("max_range = 0.1\n").unwrap_err();
+    assert!(e.to_string().contains("max_range"), "{e}");
+    let e = with("keyframes = 3\n").unwrap_err();
+    assert!(e.to_string().contains("keyframes"), "{e}");
+}

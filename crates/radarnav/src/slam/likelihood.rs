@@ -104,9 +104,12 @@ pub struct Sample {
 }
 
 impl Level {
-    /// An empty level of cell size `res` covering `centre ± half` metres.
+    /// An empty level of cell size `res` covering `centre ± half` metres (at most
+    /// [`MAX_CELLS`] cells).
     pub fn new(res: f64, centre: DVec2, half: f64) -> Self {
-        let n = ((2.0 * half / res).ceil() as usize).max(2);
+        // No more than MAX_CELLS, however fine the cells: the level grows where returns fall.
+        let side = (MAX_CELLS as f64).sqrt() as usize;
+        let n = ((2.0 * half / res).ceil() as usize).clamp(2, side);
         Self {
             res,
             origin: centre - DVec2::splat(n as f64 * res / 2.0),
