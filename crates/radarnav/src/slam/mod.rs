@@ -15,6 +15,11 @@
 //! Between registrations the estimate follows the odometry: `estimate = anchor_slam ∘
 //! anchor_odometry⁻¹ ∘ odometry`, so every consumer (a controller at 10 Hz, a mapper placing a
 //! laser scan taken between two radar scans) gets a pose at any time.
+//!
+//! The keyframes form a pose graph ([`graph`]): each joined to the one before by the
+//! registrations, and (with `loop_closure`) to an old keyframe whose submap the current scan
+//! matches after a search wider than tracking's basin. A closure that disagrees with the
+//! estimate has the graph solved and the map rebuilt from the keyframes at their new poses.
 
 pub mod graph;
 pub mod likelihood;
