@@ -34,7 +34,7 @@ use thiserror::Error;
 use crate::pose::Pose;
 use crate::scenario::{MountedSensor, Robot, Scenario};
 use crate::sensor::{PARALLEL_MIN_RAYS, Scan, ScanDraws, Tracer, with_pool_tracer};
-use crate::slam::{Localiser, SlamStats};
+use crate::slam::Localiser;
 use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
 use crate::world::World;
 
@@ -392,11 +392,6 @@ impl<'a> Simulation<'a> {
         self.slam_estimate(&self.odometry.pose)
     }
 
-    /// What the localiser did (`None` when the robot runs none).
-    pub fn slam_stats(&self) -> Option<SlamStats> {
-        self.slam.as_ref().map(Localiser::stats)
-    }
-
     /// Runs to the end.
     pub fn run<O: Observer>(&mut self, observer: &mut O) -> Result<RunSummary, O::Error> {
         self.run_until(observer, &std::sync::atomic::AtomicBool::new(false))
@@ -440,7 +435,7 @@ impl<'a> Simulation<'a> {
         // 2. Controller.
         let rate = self.controller.rate_hz();
         if self.next_control as f64 / rate <= t + TIME_EPS {
-            self.slam_now = self.slam_estimate(&self.odometry.pose);
+            self.slam_now = self.slam();
             let input = ControlInput {
                 time: t,
                 odometry: &self.odometry.pose,
@@ -484,7 +479,7 @@ impl<'a> Simulation<'a> {
             time: t,
             truth: start,
             odometry: self.odometry.pose,
-            slam: self.slam_estimate(&self.odometry.pose),
+            slam: self.slam(),
             command: cmd,
             bumped: self.bumped,
         })?;
