@@ -11,7 +11,7 @@ use crate::map::PoseSource;
 use crate::map::{CoverageSample, MapConfig, MapError, Mapper, Truth};
 use crate::mission::{DEFAULT_CONTROLLER_HZ, Mission, MissionError, MissionKind};
 use crate::nav::{BumperConfig, ExploreMission, Side, Strategy};
-use crate::scenario::Robot;
+use crate::setup::Robot;
 use crate::sim::{RunSettings, RunSummary, SimError, Simulation};
 
 /// How often an exploration run samples its coverage, s.

@@ -15,8 +15,8 @@ use tiny_skia::Pixmap;
 use crate::map::{MapConfig, MapError, MapScores, Mapper, PoseSource, score_maps};
 use crate::record::Trail;
 use crate::render::{Figure, RenderError};
-use crate::scenario::Scenario;
 use crate::sensor::{Scan, SensorConfig, Tracer, preset};
+use crate::setup::Scenario;
 use crate::sim::{Observer, RunSettings, RunSummary, Simulation, Step};
 use crate::world::{RayQuery, World};
 

@@ -2,7 +2,7 @@
 //! through foliage, smoke and dust where a laser scanner cannot.
 //!
 //! The library holds everything; the `radarnav` binary is a thin command-line layer over it.
-//! Modules: [`accuracy`] (trajectory errors, TUM files), [`world`] (shapes, materials, ray intervals, collisions), [`scenario`] (TOML files and
+//! Modules: [`accuracy`] (trajectory errors, TUM files), [`world`] (shapes, materials, ray intervals, collisions), [`setup`] (the domain values of a run: settings, robots, sensors, built in code or from files), [`scenario`] (TOML files and
 //! the built-in scenarios), [`sensor`] (radar, laser and ground-truth scans), [`vehicle`] (the
 //! P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`] (occupancy
 //! grids that tell seen-through from passable), [`compare`] (exploration experiments), [`trials`]
@@ -31,6 +31,7 @@ pub mod render;
 pub mod ros2_node;
 pub mod scenario;
 pub mod sensor;
+pub mod setup;
 pub mod sim;
 pub mod slam;
 pub mod stamp;
@@ -40,6 +41,7 @@ pub mod vehicle;
 pub mod world;
 
 pub use pose::Pose;
-pub use scenario::{Scenario, ScenarioError};
+pub use scenario::ScenarioError;
 pub use sensor::{Scan, SensorConfig};
+pub use setup::Scenario;
 pub use world::World;

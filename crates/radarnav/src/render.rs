@@ -548,8 +548,8 @@ pub fn pixmap_from_rgb(rgb: &[u8], width: u32, height: u32) -> Result<Pixmap, Re
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::Scenario;
     use crate::sensor::{Tracer, preset};
+    use crate::setup::Scenario;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

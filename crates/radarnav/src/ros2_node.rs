@@ -26,7 +26,7 @@ use crate::mission::Remote;
 use crate::record::frames;
 use crate::record::radar_images::RadarImager;
 use crate::record::ros2::{convert, msg};
-use crate::scenario::{Robot, Scenario};
+use crate::setup::{Robot, Scenario};
 use crate::sim::{Observer, RunSettings, ScanEvent, SimError, Simulation, Step};
 use crate::stamp::unix_ns;
 use crate::vehicle::DriveCommand;

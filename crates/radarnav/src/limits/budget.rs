@@ -8,8 +8,8 @@
 use glam::DVec2;
 use thiserror::Error;
 
-use crate::scenario::Robot;
 use crate::sensor::ReturnMode;
+use crate::setup::Robot;
 use crate::world::World;
 
 /// Most cells of one map (DESIGN §12).

@@ -12,8 +12,8 @@ use super::grid::{Beam, Grid, Layers, Occupancy};
 use super::truth::Truth;
 use super::walk::CellIndex;
 use crate::pose::Pose;
-use crate::scenario::{MountedSensor, Robot};
 use crate::sensor::{Scan, SensorKind};
+use crate::setup::{MountedSensor, Robot};
 use crate::sim::{Observer, ScanEvent, Step};
 use crate::vehicle::VehicleSpec;
 
@@ -474,8 +474,8 @@ impl Observer for Mapper {
 mod tests {
     use super::*;
     use crate::map::grid::{CellClass, logit};
-    use crate::scenario::Scenario;
     use crate::sensor::Tracer;
+    use crate::setup::Scenario;
     use crate::world::Shape;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;

@@ -394,7 +394,7 @@ pub(crate) fn flood_fill_from(
 mod tests {
     use super::*;
     use crate::map::grid::{Layers, Occupancy};
-    use crate::scenario::Scenario;
+    use crate::setup::Scenario;
 
     #[test]
     fn scores_on_a_hand_made_grid() {

@@ -598,7 +598,7 @@ pub(crate) mod tests {
 
     #[test]
     fn clearance_returns_follow_the_robot_between_scans() {
-        use crate::scenario::MountedSensor;
+        use crate::setup::MountedSensor;
         use crate::sim::ControlInput;
         // A radar 1 m from a wall ahead scans; then the robot drives 0.3 m on and turns 90°
         // left before the next scan. The sectors stay the scan's; the returns the body is

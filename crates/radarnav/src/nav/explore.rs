@@ -632,8 +632,8 @@ mod tests {
     use super::*;
     use crate::nav::bumper::tests::ring_scan;
     use crate::pose::Pose;
-    use crate::scenario::MountedSensor;
     use crate::sensor::preset;
+    use crate::setup::MountedSensor;
 
     const HALF_METRE: Clearance = Clearance {
         hard: 0.5,

@@ -43,7 +43,7 @@ use crate::map::{MapError, MapScores, Mapper, export, score_maps};
 use crate::output::Staged;
 use crate::pose::Pose;
 use crate::render::{Figure, RenderError, save_png, world_region};
-use crate::scenario::{Robot, Scenario};
+use crate::setup::{Robot, Scenario};
 use crate::sim::{Observer, RunSummary, ScanEvent, Step};
 use crate::vehicle::VehicleSpec;
 use crate::world::World;

@@ -13,10 +13,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::pose::Pose;
-use crate::scenario::Robot;
 use crate::sensor::cfar::{Detection, Detector, detect};
 use crate::sensor::image::{IMAGE_EPOCH_US, PowerImage, power_image};
 use crate::sensor::{SensorConfig, Tracer, beam_ray};
+use crate::setup::Robot;
 use crate::sim::Step;
 use crate::vehicle::{Twist, integrate};
 use crate::world::World;
@@ -177,8 +177,8 @@ impl<'w> RadarImager<'w> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::MountedSensor;
     use crate::sensor::preset;
+    use crate::setup::MountedSensor;
     use crate::vehicle::P3AT;
     use crate::world::Shape;
     use crate::world::strategies::world_of;

@@ -33,8 +33,8 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::pose::Pose;
-use crate::scenario::MountedSensor;
 use crate::sensor::{Beam, Echo, EchoKind, HitKind, ReturnMode, Scan, SensorKind};
+use crate::setup::MountedSensor;
 use crate::world::{MaterialId, MaterialTable};
 
 /// First eight bytes of a scan log.
@@ -389,8 +389,8 @@ fn read_echoes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::Scenario;
     use crate::sensor::Tracer;
+    use crate::setup::Scenario;
     use rand::SeedableRng;
 
     /// A multi-echo scan of foliage-wall's radar written and read back: the same ranges and

@@ -25,6 +25,8 @@ mod builtin;
 pub mod mesh_file;
 pub mod spec;
 
+/// The values this module builds, defined in [`crate::setup`] so the simulation needs no TOML.
+pub use crate::setup::{MountedSensor, Robot, Scenario, SimSettings};
 pub use builtin::{BUILTIN_SCENARIOS, NAV_SUITE, builtin_source};
 
 use glam::{DVec2, DVec3};
@@ -40,8 +42,8 @@ use crate::nav::{
     BugAlgorithm, BugMission, BumperConfig, BumperRule, ExploreMission, Side, Strategy,
 };
 use crate::pose::Pose;
-use crate::sensor::{SensorConfig, SensorKind, preset};
-use crate::vehicle::{DriveCommand, OdometryNoise, VEHICLES, VehicleSpec, vehicle};
+use crate::sensor::{SensorKind, preset};
+use crate::vehicle::{DriveCommand, OdometryNoise, VEHICLES, vehicle};
 use crate::world::{
     DB_PER_UNIT_EXTINCTION, DEFAULT_SPECULAR_LOBE_DEG, Material, MaterialTable, Object, Shape,
     World,
@@ -62,82 +64,6 @@ pub struct ScenarioError {
     pub key: Option<String>,
     /// What is wrong.
     pub message: String,
-}
-
-/// Simulation settings of a scenario.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SimSettings {
-    /// Step, s.
-    pub dt: f64,
-    /// Run length, s.
-    pub duration: f64,
-    /// RNG seed.
-    pub seed: u64,
-}
-
-/// A sensor on a robot.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MountedSensor {
-    /// Unique on its robot.
-    pub name: String,
-    /// Parameters.
-    pub config: SensorConfig,
-    /// Pose relative to the robot (z above the ground).
-    pub mount: Pose,
-}
-
-/// A robot of the scenario.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Robot {
-    /// Unique name.
-    pub name: String,
-    /// Vehicle preset.
-    pub vehicle: &'static VehicleSpec,
-    /// Start pose on the ground (z = 0).
-    pub start: Pose,
-    /// Its sensors.
-    pub sensors: Vec<MountedSensor>,
-    /// Its odometry's noise.
-    pub odometry: OdometryNoise,
-    /// Its localiser (`None`: it runs none, and `slam` poses fall back to the odometry).
-    pub slam: Option<crate::slam::SlamConfig>,
-}
-
-impl Robot {
-    /// The sensor called `name`.
-    pub fn sensor(&self, name: &str) -> Option<&MountedSensor> {
-        self.sensors.iter().find(|s| s.name == name)
-    }
-
-    /// The preset sensor `preset`, named after it and mounted where the robot's first sensor
-    /// is (0.4 m over the robot's origin if it has none); `None` for an unknown preset.
-    pub fn with_preset_mount(&self, preset: &str) -> Option<MountedSensor> {
-        Some(MountedSensor {
-            name: preset.to_owned(),
-            config: crate::sensor::preset(preset)?,
-            mount: self
-                .sensors
-                .first()
-                .map_or(Pose::new(0.0, 0.0, 0.4, 0.0), |m| m.mount),
-        })
-    }
-}
-
-/// A loaded scenario.
-#[derive(Clone, Debug)]
-pub struct Scenario {
-    /// Name: the built-in's name or the file stem.
-    pub name: String,
-    /// One line saying what it is for.
-    pub description: String,
-    /// Simulation settings.
-    pub sim: SimSettings,
-    /// Objects and materials.
-    pub world: World,
-    /// Robots.
-    pub robots: Vec<Robot>,
-    /// What a run does (`None`: the robot stands still while its sensors run).
-    pub mission: Option<Mission>,
 }
 
 struct Ctx<'a> {
@@ -250,14 +176,6 @@ impl Scenario {
             Self::from_toml(src, &format!("scenarios/{name}.toml"), name)
                 .unwrap_or_else(|e| panic!("built-in scenario is invalid: {e}")),
         )
-    }
-
-    /// The robot called `name`, or the first robot when `name` is `None`.
-    pub fn robot(&self, name: Option<&str>) -> Option<&Robot> {
-        match name {
-            Some(n) => self.robots.iter().find(|r| r.name == n),
-            None => self.robots.first(),
-        }
     }
 }
 

@@ -32,8 +32,8 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::pose::Pose;
-use crate::scenario::{MountedSensor, Robot, Scenario};
 use crate::sensor::{PARALLEL_MIN_RAYS, Scan, ScanDraws, Tracer, with_pool_tracer};
+use crate::setup::{MountedSensor, Robot, Scenario};
 use crate::slam::Localiser;
 use crate::vehicle::{DriveCommand, Odometry, Twist, VehicleSpec, integrate};
 use crate::world::World;

@@ -1,6 +1,6 @@
 use super::*;
-use crate::scenario::Scenario;
 use crate::sensor::Tracer;
+use crate::setup::Scenario;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

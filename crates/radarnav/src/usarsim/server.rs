@@ -12,7 +12,7 @@ use thiserror::Error;
 
 use super::protocol::{MAX_LINE, Message, ParseError};
 use super::session::{self, Driving, Init};
-use crate::scenario::{Robot, Scenario};
+use crate::setup::{Robot, Scenario};
 
 /// Clients served at once (USARSim's `MaxConnections`).
 pub const MAX_CLIENTS: usize = 64;

@@ -16,8 +16,8 @@ use super::protocol::{
 };
 use crate::mission::Remote;
 use crate::pose::Pose;
-use crate::scenario::{Robot, Scenario};
 use crate::sensor::{Scan, SensorConfig};
+use crate::setup::{Robot, Scenario};
 use crate::sim::{Observer, ScanEvent, Simulation};
 use crate::vehicle::DriveCommand;
 
@@ -406,7 +406,7 @@ impl<'a> Driving<'a> {
         &self,
         kind: &str,
         name: &str,
-        f: impl Fn(&crate::scenario::MountedSensor) -> String,
+        f: impl Fn(&crate::setup::MountedSensor) -> String,
     ) -> Vec<String> {
         if kind != "RangeScanner" {
             return Vec::new();

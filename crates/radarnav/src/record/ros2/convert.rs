@@ -7,8 +7,8 @@ use crate::map::Grid;
 use crate::pose::Pose;
 use crate::record::frames::{self, BASE_LINK, FieldType, MAP, ODOM, PointFieldSpec};
 use crate::record::radar_images::SweepImage;
-use crate::scenario::Robot;
 use crate::sensor::Scan;
+use crate::setup::Robot;
 use crate::sim::Step;
 
 /// A header at `ns` in `frame`.

@@ -34,8 +34,8 @@ use super::mcap_log::{mcap_err, mcap_msg};
 use super::radar_images::SweepImage;
 use crate::map::Grid;
 use crate::pose::Pose;
-use crate::scenario::Robot;
 use crate::sensor::ReturnMode;
+use crate::setup::Robot;
 use crate::sim::{ScanEvent, Step};
 use crate::stamp::unix_ns;
 
