@@ -365,15 +365,10 @@ fn runs_first_sensor(results: &[ExploreResult]) -> &str {
     results.first().map_or("", |r| r.job.sensor.as_str())
 }
 
-/// Registers the plots' font: ab_glyph draws text with registered fonts only; the font
-/// ships in the binary.
+/// Registers the plots' font (see [`radarnav::render::register_plot_font`]).
 pub fn plot_font() -> Result<()> {
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        epaint_default_fonts::UBUNTU_LIGHT,
-    )
-    .map_err(|_| anyhow::anyhow!("the plot font did not load"))
+    radarnav::render::register_plot_font()
+        .map_err(|_| anyhow::anyhow!("the plot font did not load"))
 }
 
 /// A plotting error as an `anyhow` error.

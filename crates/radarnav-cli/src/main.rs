@@ -8,6 +8,7 @@ mod run_cmd;
 mod serve_cmd;
 mod signal_cmd;
 mod signal_demo;
+mod sweep_cmd;
 
 use std::fs;
 use std::io::Write;
@@ -271,6 +272,10 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// A sweep: scenario x parameter grid x seed runs from a spec file (docs/sweeps.md), on
+    /// all cores. With --shard i/N only every N-th run from the i-th (a Slurm array task:
+    /// --shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT); `sweep merge` joins the shards.
+    Sweep(SweepArgs),
     /// Time scans of every sensor of a scenario's first robot; prints rays per second and per
     /// CPU-second. With --sim, time a whole simulated run instead; with --export and --rays,
     /// the scene and rays of the peers benchmark (bench/peers.py).
@@ -320,6 +325,38 @@ enum Command {
         /// Print the result of --rays as one line of JSON.
         #[arg(long)]
         json: bool,
+    },
+}
+
+/// `radarnav sweep`.
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+struct SweepArgs {
+    #[command(subcommand)]
+    merge: Option<SweepMerge>,
+    /// The sweep spec (TOML).
+    #[arg(required = true)]
+    spec: Option<PathBuf>,
+    /// Run only shard i of N (0 <= i < N); writes shard-i-of-N.json. Without it, every run,
+    /// merged into sweep.csv, sweep_groups.csv and sweep.png.
+    #[arg(long)]
+    shard: Option<radarnav::sweep::Shard>,
+    /// Output directory.
+    #[arg(long, default_value = "out/sweep")]
+    out: PathBuf,
+}
+
+#[derive(Subcommand)]
+enum SweepMerge {
+    /// Join the shard files (shard-i-of-N.json) found in DIRS into sweep.csv,
+    /// sweep_groups.csv and sweep.png; every run must be there exactly once.
+    Merge {
+        /// Directories holding shard files.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "out/sweep")]
+        out: PathBuf,
     },
 }
 
@@ -575,6 +612,19 @@ fn run(cli: Cli) -> Result<()> {
             },
             load,
         ),
+        Command::Sweep(SweepArgs {
+            merge: Some(SweepMerge::Merge { dirs, out }),
+            ..
+        }) => sweep_cmd::merge(&dirs, &out),
+        Command::Sweep(SweepArgs {
+            spec, shard, out, ..
+        }) => {
+            let spec = spec.context("a sweep spec is needed")?;
+            if sweep_cmd::run(&spec, shard, &out)? {
+                std::process::exit(130);
+            }
+            Ok(())
+        }
         Command::Bench {
             scenario,
             scans,

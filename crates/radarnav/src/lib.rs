@@ -11,7 +11,8 @@
 //! outputs: CSV, scan logs, MCAP, rosbag2), [`output`] (files written whole or not at all),
 //! [`stamp`] (the epoch of every output's time stamps), [`limits`] (the valid range of every input
 //! and the size estimates that bound a run), [`render`] (figures), [`demo`] (the thesis
-//! experiment), [`peers`] (the scene and rays of the benchmark against Embree and Bullet).
+//! experiment), [`peers`] (the scene and rays of the benchmark against Embree and Bullet), [`sweep`]
+//! (scenario × parameter × seed runs in shards, merged into one table).
 
 #![warn(missing_docs)]
 
@@ -35,6 +36,7 @@ pub mod setup;
 pub mod sim;
 pub mod slam;
 pub mod stamp;
+pub mod sweep;
 pub mod trials;
 pub mod usarsim;
 pub mod vehicle;

@@ -545,6 +545,17 @@ pub fn pixmap_from_rgb(rgb: &[u8], width: u32, height: u32) -> Result<Pixmap, Re
     Ok(pixmap)
 }
 
+/// Registers the font plotters draws its text with (ab_glyph draws only registered fonts; the
+/// font ships in the binary). Call before drawing a plot; calling again is harmless.
+pub fn register_plot_font() -> Result<(), String> {
+    plotters::style::register_font(
+        "sans-serif",
+        plotters::style::FontStyle::Normal,
+        epaint_default_fonts::UBUNTU_LIGHT,
+    )
+    .map_err(|_| "the plot font did not load".to_owned())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
