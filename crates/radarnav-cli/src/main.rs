@@ -968,7 +968,7 @@ fn scan(
     pixels: u32,
 ) -> Result<()> {
     let s = load(scenario)?;
-    let r = run_cmd::robot_of(&s, robot)?;
+    let r = radarnav::run::robot_of(&s, robot)?;
     let mounted = match r.sensor(sensor) {
         Some(m) => m.clone(),
         None => r.with_preset_mount(sensor).with_context(|| {

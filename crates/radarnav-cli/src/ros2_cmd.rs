@@ -19,8 +19,8 @@ pub struct Ros2Args<'a> {
 pub fn run(a: &Ros2Args<'_>) -> Result<()> {
     use radarnav::ros2_node::{LiveOptions, run};
     let s = a.scenario;
-    let robot = crate::run_cmd::robot_of(s, a.robot)?;
-    let robot = &crate::run_cmd::with_sensors(robot, a.add_sensors)?;
+    let robot = radarnav::run::robot_of(s, a.robot)?;
+    let robot = &radarnav::run::with_sensors(robot, a.add_sensors)?;
     let duration = a.duration.unwrap_or(radarnav::limits::DURATION.max);
     let mut topics = Vec::new();
     for x in &robot.sensors {

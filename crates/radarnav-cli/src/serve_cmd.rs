@@ -15,7 +15,7 @@ pub fn run(
     port: u16,
     speed: f64,
 ) -> Result<()> {
-    let template = crate::run_cmd::robot_of(scenario, robot)?;
+    let template = radarnav::run::robot_of(scenario, robot)?;
     let listener =
         TcpListener::bind((bind, port)).with_context(|| format!("listening on {bind}:{port}"))?;
     let addr = listener.local_addr().context("listening socket")?;

@@ -7,7 +7,7 @@
 //! P3AT, drive commands, kinematics, odometry), [`sim`] (the simulation loop), [`map`] (occupancy
 //! grids that tell seen-through from passable), [`compare`] (exploration experiments), [`trials`]
 //! (navigation trials), [`mission`] and [`nav`] (what drives the robot), [`usarsim`] (a server for
-//! USARSim's clients), `ros2_node` (with the `ros2` feature: a live ROS 2 node), [`record`] (run
+//! USARSim's clients), `ros2_node` (with the `ros2` feature: a live ROS 2 node), [`run`] (a recorded run, as `radarnav run` makes it), [`record`] (run
 //! outputs: CSV, scan logs, MCAP, rosbag2), [`output`] (files written whole or not at all),
 //! [`stamp`] (the epoch of every output's time stamps), [`limits`] (the valid range of every input
 //! and the size estimates that bound a run), [`render`] (figures), [`demo`] (the thesis
@@ -30,6 +30,7 @@ pub mod record;
 pub mod render;
 #[cfg(feature = "ros2")]
 pub mod ros2_node;
+pub mod run;
 pub mod scenario;
 pub mod sensor;
 pub mod setup;

@@ -393,13 +393,13 @@ impl<'a> Simulation<'a> {
     }
 
     /// Runs to the end.
-    pub fn run<O: Observer>(&mut self, observer: &mut O) -> Result<RunSummary, O::Error> {
+    pub fn run<O: Observer + ?Sized>(&mut self, observer: &mut O) -> Result<RunSummary, O::Error> {
         self.run_until(observer, &std::sync::atomic::AtomicBool::new(false))
     }
 
     /// Runs to the end, or until `stop` is set (a signal handler's flag): the step under way
     /// is finished, and the summary says `interrupted`.
-    pub fn run_until<O: Observer>(
+    pub fn run_until<O: Observer + ?Sized>(
         &mut self,
         observer: &mut O,
         stop: &std::sync::atomic::AtomicBool,
@@ -422,7 +422,7 @@ impl<'a> Simulation<'a> {
     }
 
     /// Takes one step; `false` once the run is over.
-    pub fn step<O: Observer>(&mut self, observer: &mut O) -> Result<bool, O::Error> {
+    pub fn step<O: Observer + ?Sized>(&mut self, observer: &mut O) -> Result<bool, O::Error> {
         if self.done() {
             return Ok(false);
         }
@@ -506,7 +506,7 @@ impl<'a> Simulation<'a> {
 
     /// Takes every scan not yet taken whose time is at most `until`, in time order across
     /// sensors (ties: sensor order).
-    fn fire_sensors<O: Observer>(
+    fn fire_sensors<O: Observer + ?Sized>(
         &mut self,
         until: f64,
         pose_at: impl Fn(f64) -> (Pose, Pose),
@@ -686,6 +686,27 @@ impl<'a> Simulation<'a> {
     /// The controller's report (see [`Controller::report`]).
     pub fn controller_report(&self) -> Option<serde_json::Value> {
         self.controller.report()
+    }
+
+    /// The latest scan of sensor `i` of the robot (`None` before its first or for no such
+    /// sensor). Its `pose` is the true sensor pose at the scan's time.
+    pub fn latest_scan(&self, i: usize) -> Option<&Scan> {
+        self.latest.get(i)?.as_ref()
+    }
+
+    /// Whether the last step's move was refused by a collision.
+    pub fn bumped(&self) -> bool {
+        self.bumped
+    }
+
+    /// Refused moves so far.
+    pub fn bump_count(&self) -> usize {
+        self.bump_count
+    }
+
+    /// The run's timing and seed.
+    pub fn settings(&self) -> RunSettings {
+        self.settings
     }
 
     /// What the run did so far.

@@ -36,11 +36,9 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::limits;
-use crate::mission::{MissionKind, TeleopSource, parse_teleop_csv};
-use crate::nav::Idle;
 use crate::scenario::{ScenarioError, builtin_source};
 use crate::setup::Scenario;
-use crate::sim::{Controller, NoObserver, RunSettings, Simulation};
+use crate::sim::{NoObserver, RunSettings, Simulation};
 
 /// Most runs in one sweep.
 pub const MAX_RUNS: usize = 1_000_000;
@@ -470,11 +468,10 @@ pub fn run_one(sweep: &Sweep, point: RunPoint, stop: &AtomicBool) -> Result<RunR
         message,
     };
     let scenario = sweep.scenario(point.scenario, point.point)?;
-    let mission_robot = scenario.mission.as_ref().and_then(|m| m.robot.as_deref());
-    let mut robot = scenario
-        .robot(mission_robot)
-        .ok_or_else(|| fail("the scenario has no robot".into()))?
-        .clone();
+    let base = Path::new(&sweep.scenarios[point.scenario].file).parent();
+    let plan = crate::run::plan(&scenario, None, None, base, false, point.seed)
+        .map_err(|e| fail(e.to_string()))?;
+    let mut robot = plan.robot.clone();
     let steers_on_slam = scenario
         .mission
         .as_ref()
@@ -483,28 +480,11 @@ pub fn run_one(sweep: &Sweep, point: RunPoint, stop: &AtomicBool) -> Result<RunR
     if !steers_on_slam {
         robot.slam = None;
     }
-    let controller: Box<dyn Controller> = match &scenario.mission {
-        None => Box::new(Idle { rate_hz: 10.0 }),
-        Some(m) => match &m.kind {
-            MissionKind::Teleop(TeleopSource::File(f)) => {
-                let base = Path::new(&sweep.scenarios[point.scenario].file)
-                    .parent()
-                    .unwrap_or(Path::new(""));
-                let path = base.join(f);
-                let src = limits::read_text(&path)
-                    .map_err(|e| fail(format!("{}: {e}", path.display())))?;
-                let steps = parse_teleop_csv(&src, &path.display().to_string())
-                    .map_err(|e| fail(e.to_string()))?;
-                Box::new(crate::nav::TeleopController::new(steps, m.controller_hz))
-            }
-            _ => m.controller(point.seed).map_err(|e| fail(e.to_string()))?,
-        },
-    };
     let settings = RunSettings {
         seed: point.seed,
         ..RunSettings::of(&scenario)
     };
-    let mut sim = Simulation::new(&scenario.world, &robot, controller, settings)
+    let mut sim = Simulation::new(&scenario.world, &robot, plan.controller, settings)
         .map_err(|e| fail(e.to_string()))?;
     let Ok(summary) = sim.run_until(&mut NoObserver, stop);
     Ok(RunRow::new(sweep, point, &summary))

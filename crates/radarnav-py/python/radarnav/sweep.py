@@ -1,0 +1,73 @@
+"""Sweeps on Ray: each shard of a sweep spec runs as one Ray task (on all of its node's
+cores), the shard files are written on the driver and merged into ``sweep.csv``,
+``sweep_groups.csv`` and ``sweep.png``, byte for byte what ``radarnav sweep SPEC`` writes.
+
+    from radarnav.sweep import run_on_ray
+    run_on_ray("sweeps/bug.toml", out="out/sweep")                 # a local ray.init()
+    run_on_ray("sweeps/bug.toml", address="ray://head:10001", shards=16, out="out/sweep")
+
+The spec travels to the workers with its scenario files inside; meshes and teleop files a
+scenario names must be readable at the same path on every node (a shared file system).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Optional
+
+from ._core import sweep_load, sweep_merge, sweep_runs, sweep_shard
+
+
+def _write_whole(path: str, text: str) -> None:
+    tmp = path + ".partial"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def run_local(spec: str, out: str, shards: int = 1) -> list:
+    """Runs every shard in this process, one after another, and merges them."""
+    sweep = sweep_load(spec)
+    os.makedirs(out, exist_ok=True)
+    for i in range(shards):
+        _write_whole(os.path.join(out, f"shard-{i}-of-{shards}.json"), sweep_shard(sweep, i, shards))
+    return sweep_merge([out], out)
+
+
+def run_on_ray(
+    spec: str,
+    address: Optional[str] = None,
+    shards: Optional[int] = None,
+    out: str = "out/sweep",
+    init_kwargs: Optional[dict] = None,
+) -> list:
+    """Runs the sweep at ``spec`` as ``shards`` Ray tasks and merges them into ``out``.
+
+    ``address``: a Ray cluster (``"auto"``, ``"ray://host:10001"``); ``None`` starts a local
+    Ray on this machine (dashboard off). ``shards`` defaults to the cluster's CPUs divided by
+    4, at least 1, at most the number of runs. Returns the merged files' paths.
+    """
+    import ray
+
+    sweep = sweep_load(spec)
+    started_here = False
+    if not ray.is_initialized():
+        kwargs = {"include_dashboard": False, "log_to_driver": False}
+        kwargs.update(init_kwargs or {})
+        ray.init(address=address, **kwargs)
+        started_here = True
+    try:
+        runs = sweep_runs(sweep)
+        if shards is None:
+            cpus = int(ray.cluster_resources().get("CPU", 1))
+            shards = max(1, cpus // 4)
+        shards = max(1, min(int(shards), runs))
+        task = ray.remote(num_cpus=1)(sweep_shard)
+        pending = [task.remote(sweep, i, shards) for i in range(shards)]
+        os.makedirs(out, exist_ok=True)
+        for i, text in enumerate(ray.get(pending)):
+            _write_whole(os.path.join(out, f"shard-{i}-of-{shards}.json"), text)
+        return sweep_merge([out], out)
+    finally:
+        if started_here:
+            ray.shutdown()
