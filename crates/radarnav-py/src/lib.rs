@@ -365,9 +365,7 @@ impl PySim {
     /// of those steps bumped. Stops early when the run is over.
     fn advance(&mut self, v: f64, omega: f64, seconds: f64) -> bool {
         self.command.set(DriveCommand::Twist(Twist { v, omega }));
-        let (t0, dt) = self
-            .running
-            .with_dependent(|_, sim| (sim.time(), sim.settings().dt));
+        let dt = self.running.with_dependent(|_, sim| sim.settings().dt);
         let steps = ((seconds / dt).round() as u64).max(1);
         let mut bumped = false;
         for _ in 0..steps {
@@ -377,7 +375,6 @@ impl PySim {
                 break;
             }
         }
-        let _ = t0;
         bumped
     }
 
@@ -594,7 +591,7 @@ impl PySim {
             .chunks_exact(4)
             .flat_map(|p| [p[0], p[1], p[2]])
             .collect();
-        Ok(PyArray1::from_vec(py, rgb).reshape([h, w, 3])?)
+        PyArray1::from_vec(py, rgb).reshape([h, w, 3])
     }
 
     /// What the run did so far, as the JSON text of `summary.json`'s run part.
@@ -616,6 +613,85 @@ impl PySim {
                 ))
             })
     }
+}
+
+/// What `radarnav run` does: the scenario's mission (or the teleop CSV `teleop`) recorded
+/// into `out` (trajectory.csv, TUM files, summary.json, scan logs, maps, figures, MCAP);
+/// returns `summary.json`'s text. Same scenario and seed: the same files as the CLI's.
+#[pyfunction]
+#[pyo3(signature = (scenario, out, seed = None, duration = None, robot = None, teleop = None, mcap = true, ros2_bag = false, maps = Some(Vec::new()), map_pose = "truth", pixels = 800))]
+#[allow(clippy::too_many_arguments)]
+fn run(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    out: &str,
+    seed: Option<u64>,
+    duration: Option<f64>,
+    robot: Option<&str>,
+    teleop: Option<&str>,
+    mcap: bool,
+    ros2_bag: bool,
+    maps: Option<Vec<String>>,
+    map_pose: &str,
+    pixels: u32,
+) -> PyResult<String> {
+    let (scenario, base) = match scenario.cast::<PyScenario>() {
+        Ok(s) => (Arc::clone(&s.get().inner), None),
+        Err(_) => {
+            let arg: String = scenario.extract()?;
+            let base = Path::new(&arg)
+                .is_file()
+                .then(|| Path::new(&arg).parent().map(Path::to_owned))
+                .flatten();
+            (PyScenario::load(&arg)?.inner, base)
+        }
+    };
+    if let Some(d) = duration {
+        radarnav::limits::DURATION
+            .check(d)
+            .map_err(|m| value_err(format!("duration: {m}")))?;
+    }
+    let pixels = radarnav::limits::PIXELS
+        .check(f64::from(pixels))
+        .map_err(|m| value_err(format!("pixels: {m}")))? as u32;
+    let map_pose = radarnav::map::PoseSource::parse(map_pose).ok_or_else(|| {
+        value_err(format!(
+            "map_pose `{map_pose}`: expected truth, odometry or slam"
+        ))
+    })?;
+    let stop = AtomicBool::new(false);
+    let out = PathBuf::from(out);
+    let teleop = teleop.map(PathBuf::from);
+    let defaults = radarnav::map::MapConfig::default();
+    py.detach(|| {
+        radarnav::run::record_run(
+            &radarnav::run::RunRequest {
+                scenario: &scenario,
+                base: base.as_deref(),
+                out: &out,
+                robot,
+                teleop: teleop.as_deref(),
+                seed,
+                duration,
+                mcap,
+                ros2_bag,
+                pixels,
+                maps: maps.as_deref(),
+                map_pose,
+                map_resolution: defaults.resolution,
+                map_max_free_range: defaults.max_free_range,
+                add_sensors: &[],
+                slam_sensor: None,
+                budget: radarnav::limits::budget::Budget::from_gb(None, None),
+                stop: &stop,
+            },
+            &mut |_| {},
+        )
+    })
+    .map_err(value_err)?;
+    let summary = out.join("summary.json");
+    std::fs::read_to_string(&summary)
+        .map_err(|e| PyOSError::new_err(format!("{}: {e}", summary.display())))
 }
 
 /// Names of the built-in scenarios.
@@ -671,6 +747,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenario>()?;
     m.add_class::<PySim>()?;
     m.add_function(wrap_pyfunction!(builtins, m)?)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_load, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_runs, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_shard, m)?)?;

@@ -256,7 +256,7 @@ fn mappers(r: &RunRequest<'_>, robot: &Robot) -> Result<(Vec<Mapper>, f64), RunE
     names.sort_unstable();
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
         return Err(RunError::Request(format!(
-            "the map `{}` is asked for twice",
+            "`maps` names the map `{}` twice",
             w[0]
         )));
     }

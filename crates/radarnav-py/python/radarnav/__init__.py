@@ -16,12 +16,14 @@ import when gymnasium is installed); ``radarnav.sweep`` runs sweeps on Ray.
 import json as _json
 
 from ._core import Scenario, Sim, __version__, builtins
+from ._core import run as _run
 from ._core import sweep_load, sweep_merge, sweep_runs, sweep_shard
 
 __all__ = [
     "Scenario",
     "Sim",
     "builtins",
+    "run",
     "summary",
     "sweep_load",
     "sweep_merge",
@@ -29,6 +31,15 @@ __all__ = [
     "sweep_shard",
     "__version__",
 ]
+
+
+def run(scenario, out: str, **options) -> dict:
+    """What ``radarnav run`` does, from Python: the scenario's mission recorded into ``out``
+    (same files, same bytes as the CLI for the same scenario and seed). Options: ``seed``,
+    ``duration``, ``robot``, ``teleop`` (a CSV path), ``mcap``, ``ros2_bag``, ``maps`` (sensor
+    names; ``None`` for no maps), ``map_pose``, ``pixels``. Returns ``summary.json`` as a dict.
+    """
+    return _json.loads(_run(scenario, out, **options))
 
 
 def summary(sim: Sim) -> dict:

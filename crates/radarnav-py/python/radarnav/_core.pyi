@@ -77,6 +77,19 @@ class Sim:
     def summary_json(self) -> str: ...
 
 def builtins() -> list[str]: ...
+def run(
+    scenario: Union[Scenario, str],
+    out: str,
+    seed: Optional[int] = None,
+    duration: Optional[float] = None,
+    robot: Optional[str] = None,
+    teleop: Optional[str] = None,
+    mcap: bool = True,
+    ros2_bag: bool = False,
+    maps: Optional[Sequence[str]] = ...,
+    map_pose: str = "truth",
+    pixels: int = 800,
+) -> str: ...
 def sweep_load(path: str) -> str: ...
 def sweep_runs(sweep_json: str) -> int: ...
 def sweep_shard(sweep_json: str, index: int, count: int) -> str: ...

@@ -25,6 +25,11 @@ def _write_whole(path: str, text: str) -> None:
     os.replace(tmp, path)
 
 
+def _shard(sweep_json: str, index: int, count: int) -> str:
+    """One shard's table as JSON text (a Python function, as Ray's tasks must be)."""
+    return sweep_shard(sweep_json, index, count)
+
+
 def run_local(spec: str, out: str, shards: int = 1) -> list:
     """Runs every shard in this process, one after another, and merges them."""
     sweep = sweep_load(spec)
@@ -62,7 +67,7 @@ def run_on_ray(
             cpus = int(ray.cluster_resources().get("CPU", 1))
             shards = max(1, cpus // 4)
         shards = max(1, min(int(shards), runs))
-        task = ray.remote(num_cpus=1)(sweep_shard)
+        task = ray.remote(num_cpus=1)(_shard)
         pending = [task.remote(sweep, i, shards) for i in range(shards)]
         os.makedirs(out, exist_ok=True)
         for i, text in enumerate(ray.get(pending)):
