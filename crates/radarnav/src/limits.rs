@@ -200,7 +200,11 @@ limits! {
     /// Bytes a run may write.
     MAX_OUTPUT = "--max-output" in "run": 1e-3, 1e4, "GB", "default 10 GB";
     /// Seeds of a batch.
-    SEEDS = "--seeds" in "compare, nav-suite": 1.0, 1e4, "", "";
+    SEEDS = "--seeds, seeds.count" in "compare, nav-suite, sweep spec": 1.0, 1e4, "", "";
+    /// Runs of a sweep (scenarios x grid points x seeds).
+    SWEEP_RUNS = "runs (count)" in "sweep spec": 1.0, 1e6, "", "cut it into shards; each shard file holds its rows";
+    /// Shards of a sweep.
+    SHARDS = "--shard i/N" in "sweep": 1.0, 1e5, "", "0 <= i < N";
     /// Extra scans of the demo.
     REPEATS = "--repeats" in "demo, bench": 0.0, 1e5, "", "";
     /// Scans of a benchmark.

@@ -40,10 +40,10 @@ use crate::scenario::{ScenarioError, builtin_source};
 use crate::setup::Scenario;
 use crate::sim::{NoObserver, RunSettings, Simulation};
 
-/// Most runs in one sweep.
-pub const MAX_RUNS: usize = 1_000_000;
-/// Most shards a sweep is cut into.
-pub const MAX_SHARDS: usize = 100_000;
+/// Most runs in one sweep ([`limits::SWEEP_RUNS`]).
+pub const MAX_RUNS: usize = limits::SWEEP_RUNS.max as usize;
+/// Most shards a sweep is cut into ([`limits::SHARDS`]).
+pub const MAX_SHARDS: usize = limits::SHARDS.max as usize;
 
 /// A sweep that cannot be loaded, run or merged.
 #[derive(Debug, Error)]
