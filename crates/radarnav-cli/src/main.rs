@@ -2,9 +2,11 @@
 
 mod bench_cmd;
 mod compare_cmd;
+mod demo_cmd;
 mod nav_suite_cmd;
 mod ros2_cmd;
 mod run_cmd;
+mod scan_cmd;
 mod serve_cmd;
 mod signal_cmd;
 mod signal_demo;
@@ -13,18 +15,14 @@ mod sweep_cmd;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use radarnav::demo::{result_figure, share_past_foliage, thesis_experiment};
+use radarnav::Scenario;
 use radarnav::limits::{self, Limit};
 use radarnav::render::{Figure, save_png};
 use radarnav::scenario::{BUILTIN_SCENARIOS, NAV_SUITE};
-use radarnav::sensor::{PRESETS, Tracer};
-use radarnav::{Pose, Scan, Scenario};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+use radarnav::sensor::PRESETS;
 
 #[derive(Parser)]
 #[command(
@@ -422,7 +420,7 @@ impl Command {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Demo { out, seed, repeats } => demo(&out, seed, repeats),
+        Command::Demo { out, seed, repeats } => demo_cmd::demo(&out, seed, repeats),
         Command::Scenarios => {
             for (name, _) in BUILTIN_SCENARIOS.iter().chain(NAV_SUITE) {
                 let s = Scenario::builtin(name).context("built-in scenario")?;
@@ -511,7 +509,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             out,
             pixels,
-        } => scan(
+        } => scan_cmd::scan(
             &scenario,
             &sensor,
             robot.as_deref(),
@@ -662,399 +660,10 @@ fn run(cli: Cli) -> Result<()> {
 
 /// A built-in scenario by name, or a TOML file by path.
 fn load(arg: &str) -> Result<Scenario> {
-    let path = Path::new(arg);
-    if path.exists() || arg.ends_with(".toml") {
-        let src = radarnav::limits::read_text(path)
-            .with_context(|| format!("reading scenario file {arg}"))?;
-        let name = path
-            .file_stem()
-            .map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned());
-        return Ok(Scenario::from_toml(&src, arg, &name)?);
-    }
-    Scenario::builtin(arg).with_context(|| {
-        let names: Vec<&str> = BUILTIN_SCENARIOS.iter().map(|(n, _)| *n).collect();
-        format!(
-            "`{arg}` is neither a file nor a built-in scenario ({})",
-            names.join(", ")
-        )
-    })
+    Ok(radarnav::scenario::load(arg)?)
 }
 
-fn create_dir(dir: &Path) -> Result<()> {
+/// Creates `dir` and its parents.
+pub fn create_dir(dir: &Path) -> Result<()> {
     fs::create_dir_all(dir).with_context(|| format!("creating output directory {}", dir.display()))
-}
-
-fn parse_pose(s: &str) -> Result<Pose> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("--pose `{s}`: expected x,y,yaw_deg"))?;
-    match v.as_slice() {
-        [x, y, yaw] => {
-            for (what, v, limit) in [("x", x, &limits::COORD), ("y", y, &limits::COORD)]
-                .into_iter()
-                .chain([("yaw_deg", yaw, &limits::YAW)])
-            {
-                limit
-                    .check(*v)
-                    .map_err(|m| anyhow::anyhow!("--pose `{s}`: {what}: {m}"))?;
-            }
-            Ok(Pose::new(*x, *y, 0.0, yaw.to_radians()))
-        }
-        _ => bail!("--pose `{s}`: expected three numbers x,y,yaw_deg"),
-    }
-}
-
-fn demo(out: &Path, seed: Option<u64>, repeats: usize) -> Result<()> {
-    let s = Scenario::builtin("foliage-wall").context("built-in scenario")?;
-    let seed = seed.unwrap_or(s.sim.seed);
-    let results = thesis_experiment(&s, seed, repeats)?;
-    create_dir(out)?;
-    say!(
-        "foliage-wall, robot at its start pose, seed {seed}: share of rays that see past the foliage wall"
-    );
-    say!(
-        "{:<18} {:<18} {:>6} {:>12} {:>16}",
-        "figure",
-        "preset",
-        "rays",
-        "this scan",
-        format!("mean of {}", repeats + 1)
-    );
-    for r in &results {
-        let path = out.join(format!("{}.png", r.file));
-        save_png(&result_figure(&s, r, 900)?, &path)?;
-        say!(
-            "{:<18} {:<18} {:>6} {:>11.1}% {:>15.2}%",
-            r.file,
-            r.preset,
-            r.scan.len(),
-            100.0 * r.share_past,
-            100.0 * r.mean_share_past
-        );
-    }
-    say!("figures written to {}", out.display());
-    map_demo(&s, seed, out)?;
-    slam_demo(seed, out)?;
-    bug_demo(seed, out)?;
-    signal_demo::signal_demo(out, seed)
-}
-
-/// The second half of the demo: the foliage-wall mission driven once while four maps are
-/// built (radar and laser, each at the true and at the odometry pose), then scored.
-fn map_demo(s: &Scenario, seed: u64, out: &Path) -> Result<()> {
-    use radarnav::map::{PoseSource, export};
-    let maps = [
-        ("radar", PoseSource::Truth, "map_radar"),
-        ("laser", PoseSource::Truth, "map_laser"),
-        ("radar", PoseSource::Odometry, "map_radar_odometry"),
-        ("laser", PoseSource::Odometry, "map_laser_odometry"),
-    ];
-    let specs: Vec<(&str, PoseSource)> = maps.iter().map(|m| (m.0, m.1)).collect();
-    let t0 = Instant::now();
-    let e = radarnav::demo::mapping_experiment(s, seed, &specs, 0.05)?;
-    let wall = t0.elapsed().as_secs_f64();
-    let robot = s.robot(None).context("foliage-wall has a robot")?;
-    say!("");
-    say!(
-        "foliage-wall mission driven once ({:.1} s, {:.1} m, {} bumps, {:.2} s wall), mapped at 0.05 m:",
-        e.summary.duration,
-        e.summary.distance,
-        e.summary.bumps,
-        wall
-    );
-    say!(
-        "{:<8} {:<9} {:>6} {:>10} {:>22} {:>10} {:>10} {:>10} {:>10}",
-        "map",
-        "pose",
-        "scans",
-        "known m2",
-        "hidden area clear",
-        "obst prec",
-        "obst rec",
-        "free prec",
-        "free rec"
-    );
-    let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
-    for (m, (_, _, stem)) in e.maps.iter().zip(maps) {
-        let sc = &m.scores;
-        say!(
-            "{:<8} {:<9} {:>6} {:>10.1} {:>22} {:>10} {:>10} {:>10} {:>10}",
-            m.mapper.name(),
-            m.mapper.config().pose.as_str(),
-            m.mapper.scans(),
-            sc.known_area_m2,
-            format!(
-                "{:.1} of {:.1} m2 ({})",
-                sc.hidden_clear_m2,
-                sc.hidden_area_m2,
-                pct(sc.hidden_coverage)
-            ),
-            pct(sc.obstacle_precision),
-            pct(sc.obstacle_recall),
-            pct(sc.free_precision),
-            pct(sc.free_recall)
-        );
-        let title = format!(
-            "foliage-wall - {} map ({} pose): {} of the hidden area clear",
-            m.mapper.name(),
-            m.mapper.config().pose.as_str(),
-            pct(sc.hidden_coverage)
-        );
-        let overlay = export::Overlay {
-            path: &e.path,
-            robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
-            region: Some(radarnav::render::world_region(&s.world)),
-            marks: None,
-            estimates: &[],
-        };
-        export::write_all(m.mapper.grid(), out, stem, &title, 900, &overlay)?;
-    }
-    say!(
-        "maps written to {} (map_*.png in the thesis' palette, .pgm/.yaml for ROS map_server, .npy raw log-odds)",
-        out.display()
-    );
-    Ok(())
-}
-
-/// The thesis' figure 15 made its way, with SLAM: the foliage-wall loop on a drifting odometry
-/// (`slam/foliage-wall-loop`), steered on the radar localiser's pose, and the radar map built on
-/// that pose, with the true, odometry and SLAM paths over it; beside it the radar map on the
-/// true pose and on the odometry.
-fn slam_demo(seed: u64, out: &Path) -> Result<()> {
-    use radarnav::map::{PoseSource, export};
-    let s = Scenario::builtin("slam/foliage-wall-loop").context("built-in scenario")?;
-    let maps = [
-        (PoseSource::Slam, "fig15_radar_slam"),
-        (PoseSource::Truth, "map_radar_loop_truth"),
-        (PoseSource::Odometry, "map_radar_loop_odometry"),
-    ];
-    let specs: Vec<(&str, PoseSource)> = maps.iter().map(|m| ("radar", m.0)).collect();
-    let e = radarnav::demo::mapping_experiment(&s, seed, &specs, 0.05)?;
-    let robot = s.robot(None).context("the scenario has a robot")?;
-    let slam = e
-        .summary
-        .slam
-        .as_ref()
-        .context("the robot runs a localiser")?;
-    say!("");
-    say!(
-        "slam/foliage-wall-loop: {:.0} s looped on a drifting odometry, steering on radar SLAM ({:.1} m, {} bumps); end error odometry {:.2} m, SLAM {:.3} m:",
-        e.summary.duration,
-        e.summary.distance,
-        e.summary.bumps,
-        e.summary.odometry_error,
-        slam.error
-    );
-    let pct = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
-    for (m, (pose, stem)) in e.maps.iter().zip(maps) {
-        say!(
-            "  radar map on {:<9} hidden area clear {:>6}, obstacle precision {:>6}",
-            pose.as_str(),
-            pct(m.scores.hidden_coverage),
-            pct(m.scores.obstacle_precision)
-        );
-        let title = format!(
-            "radar map on the {} pose: hidden {}, obst. prec. {}",
-            pose.as_str(),
-            pct(m.scores.hidden_coverage),
-            pct(m.scores.obstacle_precision)
-        );
-        let estimates = [
-            (e.odometry_path.as_slice(), [200, 60, 40], "odometry"),
-            (e.slam_path.as_slice(), [150, 40, 190], "radar SLAM"),
-        ];
-        let overlay = export::Overlay {
-            path: &e.path,
-            robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
-            region: Some(radarnav::render::world_region(&s.world)),
-            marks: None,
-            estimates: &estimates,
-        };
-        export::write_all(m.mapper.grid(), out, stem, &title, 900, &overlay)?;
-    }
-    Ok(())
-}
-
-/// The third part of the demo: Bug1 and Bug2 with the radar on foliage-gap (the
-/// foliage-wall hedge with a way round it), the goal behind the hedge; each path drawn over
-/// the radar map built on the way.
-fn bug_demo(seed: u64, out: &Path) -> Result<()> {
-    use radarnav::map::{PoseSource, export};
-    use radarnav::mission::MissionKind;
-    use radarnav::nav::BugAlgorithm;
-    let base = Scenario::builtin("foliage-gap").context("built-in scenario")?;
-    say!("");
-    say!(
-        "Bug1 and Bug2 with the radar on foliage-gap: the foliage-wall hedge with a 3 m opening at its north end, the goal behind it:"
-    );
-    say!(
-        "{:<6} {:>9} {:>10} {:>8} {:>6} {:>6} {:>7} {:>10}",
-        "algo",
-        "outcome",
-        "path",
-        "time",
-        "bumps",
-        "hits",
-        "leaves",
-        "to goal"
-    );
-    for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
-        let mut s = base.clone();
-        if let Some(MissionKind::Bug(b)) = s.mission.as_mut().map(|m| &mut m.kind) {
-            b.algorithm = algorithm;
-        }
-        let e =
-            radarnav::demo::mapping_experiment(&s, seed, &[("radar", PoseSource::Truth)], 0.05)?;
-        let robot = s.robot(None).context("foliage-gap has a robot")?;
-        let nav = e.summary.navigation.clone().unwrap_or_default();
-        let count = |k: &str| nav[k].as_array().map_or(0, Vec::len);
-        let outcome = serde_json::to_value(e.summary.outcome)?;
-        let m = &e.maps[0];
-        let to_goal = nav["goal_distance"].as_f64().unwrap_or(f64::NAN);
-        let goal: Vec<glam::DVec2> = match s.mission.as_ref().map(|m| &m.kind) {
-            Some(MissionKind::Bug(b)) => vec![b.goal],
-            _ => Vec::new(),
-        };
-        say!(
-            "{:<6} {:>9} {:>8.1} m {:>6.1} s {:>6} {:>6} {:>7} {:>8.2} m",
-            algorithm.as_str(),
-            outcome.as_str().unwrap_or("?"),
-            e.summary.distance,
-            e.summary.duration,
-            e.summary.bumps,
-            count("hit_points"),
-            count("leave_points"),
-            to_goal
-        );
-        let title = format!(
-            "foliage-gap - {} with the radar: {} after {:.1} m, {} bumps",
-            algorithm.as_str(),
-            outcome.as_str().unwrap_or("?"),
-            e.summary.distance,
-            e.summary.bumps
-        );
-        let overlay = export::Overlay {
-            path: &e.path,
-            robot: Some((robot.vehicle, robot.start, e.summary.final_pose)),
-            region: Some(radarnav::render::world_region(&s.world)),
-            marks: Some((&goal, "goal")),
-            estimates: &[],
-        };
-        export::write_all(
-            m.mapper.grid(),
-            out,
-            &format!("{}_radar", algorithm.as_str()),
-            &title,
-            900,
-            &overlay,
-        )?;
-    }
-    say!(
-        "paths over the radar maps written to {} (bug1_radar.png, bug2_radar.png)",
-        out.display()
-    );
-    Ok(())
-}
-
-fn scan(
-    scenario: &str,
-    sensor: &str,
-    robot: Option<&str>,
-    pose: Option<&str>,
-    seed: Option<u64>,
-    out: &Path,
-    pixels: u32,
-) -> Result<()> {
-    let s = load(scenario)?;
-    let r = radarnav::run::robot_of(&s, robot)?;
-    let mounted = match r.sensor(sensor) {
-        Some(m) => m.clone(),
-        None => r.with_preset_mount(sensor).with_context(|| {
-            let on_robot: Vec<&str> = r.sensors.iter().map(|m| m.name.as_str()).collect();
-            format!(
-                "`{sensor}` is neither a sensor of robot `{}` ({}) nor a preset (see `radarnav presets`)",
-                r.name,
-                on_robot.join(", ")
-            )
-        })?,
-    };
-    let robot_pose = pose.map(parse_pose).transpose()?.unwrap_or(r.start);
-    let sensor_pose = robot_pose.compose(&mounted.mount);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed.unwrap_or(s.sim.seed));
-    let scan = mounted.config.scan(
-        &s.world,
-        &sensor_pose,
-        0.0,
-        &mut rng,
-        &mut Tracer::default(),
-    );
-
-    create_dir(out)?;
-    let mut fig = Figure::of_world(&s.world, None, pixels)?;
-    fig.draw_scan(&scan);
-    fig.draw_robot(&robot_pose, r.vehicle);
-    save_png(
-        &fig.finish(&format!("{} - {}", s.name, mounted.name)),
-        &out.join("scan.png"),
-    )?;
-    let materials: Vec<&str> = s
-        .world
-        .materials()
-        .iter()
-        .map(|(_, m)| m.name.as_str())
-        .collect();
-    let json = serde_json::json!({
-        "scenario": s.name,
-        "robot": r.name,
-        "sensor": mounted.name,
-        "config": mounted.config,
-        "materials": materials,
-        "scan": scan,
-    });
-    radarnav::record::write_whole(&out.join("scan.json"), &serde_json::to_vec_pretty(&json)?)?;
-    write_csv(&out.join("scan.csv"), &scan, &materials)?;
-    let (signal, _) = signal_cmd::write_signal_outputs(
-        &s,
-        &mounted,
-        &sensor_pose,
-        &scan,
-        &materials,
-        &mut rng,
-        out,
-    )?;
-    let share = share_past_foliage(&s.world, &scan);
-    let returns = scan.ranges.iter().filter(|r| r.is_finite()).count();
-    say!(
-        "{} rays, {} returns, {:.1}% see past foliage; wrote scan.png, scan.json, scan.csv{} to {}",
-        scan.len(),
-        returns,
-        100.0 * share,
-        signal.iter().map(|f| format!(", {f}")).collect::<String>(),
-        out.display()
-    );
-    Ok(())
-}
-
-fn write_csv(path: &Path, scan: &Scan, materials: &[&str]) -> Result<()> {
-    let mut w = Vec::new();
-    writeln!(
-        w,
-        "index,azimuth_deg,elevation_deg,range_m,hit,material,beam"
-    )?;
-    for i in 0..scan.len() {
-        let (az, el) = scan.angles(i);
-        let material = scan.materials[i].map_or("", |m| materials[m.0 as usize]);
-        writeln!(
-            w,
-            "{i},{:.6},{:.6},{},{},{material},{}",
-            az.to_degrees(),
-            el.to_degrees(),
-            scan.ranges[i],
-            scan.hits[i].as_str(),
-            scan.beams[i].as_str()
-        )?;
-    }
-    Ok(radarnav::record::write_whole(path, &w)?)
 }

@@ -44,15 +44,11 @@ impl PyScenario {
     /// A built-in scenario (`builtins()` lists them) or a TOML file's path.
     #[staticmethod]
     fn load(name_or_path: &str) -> PyResult<Self> {
-        let path = Path::new(name_or_path);
-        if path.is_file() {
-            return Self::from_file(name_or_path);
-        }
-        let s = Scenario::builtin(name_or_path).ok_or_else(|| {
-            PyKeyError::new_err(format!(
-                "`{name_or_path}` is neither a file nor a built-in scenario; built-ins: {}",
-                builtins().join(", ")
-            ))
+        use radarnav::scenario::LoadError;
+        let s = radarnav::scenario::load(name_or_path).map_err(|e| match e {
+            LoadError::Io { .. } => PyOSError::new_err(e.to_string()),
+            LoadError::Unknown { .. } => PyKeyError::new_err(e.to_string()),
+            LoadError::Scenario(e) => value_err(e),
         })?;
         Ok(Self { inner: Arc::new(s) })
     }

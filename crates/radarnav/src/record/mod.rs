@@ -26,6 +26,7 @@ pub mod mcap_log;
 pub mod radar_images;
 #[cfg(feature = "mcap")]
 pub mod ros2;
+pub mod scan_files;
 pub mod scan_log;
 
 pub use scan_log::{ScanLogError, ScanLogHeader, ScanLogWriter, read_scan_log};

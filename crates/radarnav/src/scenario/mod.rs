@@ -179,6 +179,56 @@ impl Scenario {
     }
 }
 
+/// A scenario that could not be loaded by [`load`].
+#[derive(Debug, Error)]
+pub enum LoadError {
+    /// The file could not be read.
+    #[error("reading scenario file {path}: {cause}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+    /// The file is not a valid scenario.
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// Neither a file nor a built-in.
+    #[error("`{name}` is neither a file nor a built-in scenario ({known})")]
+    Unknown {
+        /// What was asked for.
+        name: String,
+        /// The built-ins, comma-separated.
+        known: String,
+    },
+}
+
+/// A scenario by file path (an existing file, or any name ending in `.toml`) or built-in name:
+/// what every front end (CLI, Python) means by a scenario argument.
+pub fn load(name_or_path: &str) -> Result<Scenario, LoadError> {
+    let path = std::path::Path::new(name_or_path);
+    if path.is_file() || name_or_path.ends_with(".toml") {
+        let src = crate::limits::read_text(path).map_err(|e| LoadError::Io {
+            path: name_or_path.to_owned(),
+            cause: e,
+        })?;
+        let name = path.file_stem().map_or_else(
+            || name_or_path.to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        return Ok(Scenario::from_toml(&src, name_or_path, &name)?);
+    }
+    Scenario::builtin(name_or_path).ok_or_else(|| LoadError::Unknown {
+        name: name_or_path.to_owned(),
+        known: BUILTIN_SCENARIOS
+            .iter()
+            .chain(NAV_SUITE)
+            .map(|(n, _)| *n)
+            .collect::<Vec<_>>()
+            .join(", "),
+    })
+}
+
 /// A Bug or exploration mission's bumpers read first echoes (DESIGN §6): its bumper radar,
 /// if it is in the thesis' return mode, is switched to `all` (range = first echo, every echo
 /// beside it for the maps), so foliage it sees through is an obstacle to it.
