@@ -100,6 +100,15 @@ pub enum MissionError {
 }
 
 impl Mission {
+    /// A mission of the first robot at the default controller rate.
+    pub fn new(kind: MissionKind) -> Self {
+        Self {
+            robot: None,
+            controller_hz: DEFAULT_CONTROLLER_HZ,
+            kind,
+        }
+    }
+
     /// The controller that carries the mission out; `seed` feeds the random choices of the
     /// strategies that make some.
     pub fn controller(&self, seed: u64) -> Result<Box<dyn Controller>, MissionError> {

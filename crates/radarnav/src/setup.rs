@@ -23,7 +23,7 @@
 //! assert_eq!(scenario.robot(None).unwrap().sensors.len(), 1);
 //! ```
 
-use crate::mission::Mission;
+use crate::mission::{Mission, MissionKind};
 use crate::pose::Pose;
 use crate::sensor::SensorConfig;
 use crate::slam::SlamConfig;
@@ -180,8 +180,10 @@ impl Scenario {
         self
     }
 
-    /// The scenario with `mission`.
+    /// The scenario with `mission` (add the robots first). A Bug or exploration mission's bumper radar is switched
+    /// to first echoes, as a scenario file's is ([`bumpers_on_first_echoes`]).
     pub fn with_mission(mut self, mission: Mission) -> Self {
+        bumpers_on_first_echoes(&mission, &mut self.robots);
         self.mission = Some(mission);
         self
     }
@@ -198,5 +200,25 @@ impl Scenario {
             Some(n) => self.robots.iter().find(|r| r.name == n),
             None => self.robots.first(),
         }
+    }
+}
+
+/// A Bug or exploration mission's bumpers read first echoes (DESIGN §6): its bumper radar,
+/// if it is in the thesis' return mode, is switched to `all` (range = first echo, every echo
+/// beside it for the maps), so foliage it sees through is an obstacle to it.
+pub fn bumpers_on_first_echoes(mission: &Mission, robots: &mut [Robot]) {
+    let bumpers = match &mission.kind {
+        MissionKind::Bug(b) => &b.bumpers,
+        MissionKind::Explore(e) => &e.bumpers,
+        _ => return,
+    };
+    let robot = match &mission.robot {
+        Some(n) => robots.iter_mut().find(|r| &r.name == n),
+        None => robots.first_mut(),
+    };
+    if let Some(r) = robot
+        && let Some(i) = bumpers.sensor_index(r.sensors.iter().map(|s| s.name.as_str()))
+    {
+        crate::nav::read_first_echoes(&mut r.sensors[i].config);
     }
 }

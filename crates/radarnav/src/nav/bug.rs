@@ -174,6 +174,26 @@ pub struct BugMission {
     pub bumpers: BumperConfig,
 }
 
+impl BugMission {
+    /// A mission to `goal` with the defaults of a scenario file's `[mission]`: reached within
+    /// 0.3 m, on the m-line within 0.1 m, back at a point within 0.75 m, obstacles kept on
+    /// the left, 0.4 m/s, steering on the odometry (as a real robot), the default bumpers on
+    /// the robot's first sensor.
+    pub fn new(algorithm: BugAlgorithm, goal: DVec2) -> Self {
+        Self {
+            algorithm,
+            goal,
+            tolerance: 0.3,
+            mline_tolerance: 0.1,
+            loop_tolerance: 0.75,
+            follow: Side::Left,
+            speed: 0.4,
+            pose: PoseSource::Odometry,
+            bumpers: BumperConfig::default(),
+        }
+    }
+}
+
 /// What a Bug run did, for `summary.json`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct BugReport {

@@ -25,6 +25,7 @@ mod builtin;
 pub mod mesh_file;
 pub mod spec;
 
+use crate::setup::bumpers_on_first_echoes;
 /// The values this module builds, defined in [`crate::setup`] so the simulation needs no TOML.
 pub use crate::setup::{MountedSensor, Robot, Scenario, SimSettings};
 pub use builtin::{BUILTIN_SCENARIOS, NAV_SUITE, builtin_source};
@@ -227,26 +228,6 @@ pub fn load(name_or_path: &str) -> Result<Scenario, LoadError> {
             .collect::<Vec<_>>()
             .join(", "),
     })
-}
-
-/// A Bug or exploration mission's bumpers read first echoes (DESIGN §6): its bumper radar,
-/// if it is in the thesis' return mode, is switched to `all` (range = first echo, every echo
-/// beside it for the maps), so foliage it sees through is an obstacle to it.
-fn bumpers_on_first_echoes(mission: &Mission, robots: &mut [Robot]) {
-    let bumpers = match &mission.kind {
-        MissionKind::Bug(b) => &b.bumpers,
-        MissionKind::Explore(e) => &e.bumpers,
-        _ => return,
-    };
-    let robot = match &mission.robot {
-        Some(n) => robots.iter_mut().find(|r| &r.name == n),
-        None => robots.first_mut(),
-    };
-    if let Some(r) = robot
-        && let Some(i) = bumpers.sensor_index(r.sensors.iter().map(|s| s.name.as_str()))
-    {
-        crate::nav::read_first_echoes(&mut r.sensors[i].config);
-    }
 }
 
 fn build_materials(ctx: &Ctx, spec: &ScenarioSpec) -> Result<MaterialTable, ScenarioError> {
@@ -971,20 +952,21 @@ fn build_mission(
             let Some(goal) = &spec.goal else {
                 return Err(ctx.err(span, Some("goal"), "a bug mission needs a `goal = [x, y]`"));
             };
+            let algorithm = if kind_name == "bug1" {
+                BugAlgorithm::Bug1
+            } else {
+                BugAlgorithm::Bug2
+            };
+            let d = BugMission::new(algorithm, DVec2::new(goal[0].0, goal[1].0));
             MissionKind::Bug(BugMission {
-                algorithm: if kind_name == "bug1" {
-                    BugAlgorithm::Bug1
-                } else {
-                    BugAlgorithm::Bug2
-                },
-                goal: DVec2::new(goal[0].0, goal[1].0),
-                tolerance: spec.tolerance.map_or(0.3, |v| v.0),
-                mline_tolerance: spec.mline_tolerance.map_or(0.1, |v| v.0),
-                loop_tolerance: spec.loop_tolerance.map_or(0.75, |v| v.0),
+                tolerance: spec.tolerance.map_or(d.tolerance, |v| v.0),
+                mline_tolerance: spec.mline_tolerance.map_or(d.mline_tolerance, |v| v.0),
+                loop_tolerance: spec.loop_tolerance.map_or(d.loop_tolerance, |v| v.0),
                 follow: nav.follow,
                 speed: nav.speed,
                 pose: nav.pose,
                 bumpers: nav.bumpers,
+                ..d
             })
         }
         "explore" => {
