@@ -400,12 +400,14 @@ impl Sweep {
                     message: format!("scenario `{}`: grid key `{key}`: {m}", sc.name),
                 })?;
             }
-            // Errors point into this text; the message names the key and the range.
             let text = toml::to_string(&doc).map_err(|e| SweepError::Spec {
                 file: self.file.clone(),
                 message: format!("scenario `{}`{point}: {e}", sc.name),
             })?;
-            Scenario::from_toml(&text, &sc.file, &stem).map_err(wrap)?
+            // Lines of an error count in the rewritten text, not the file: say so. The
+            // message names the key and its range all the same.
+            let file = format!("{} (rewritten with the grid point)", sc.file);
+            Scenario::from_toml(&text, &file, &stem).map_err(wrap)?
         };
         if let Some(d) = self.duration {
             scenario.sim.duration = d;
