@@ -19,10 +19,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use radarnav::map::{MapConfig, Mapper};
 use radarnav::mission::Remote;
+use radarnav::record::radar_images::{RadarImager, SweepImage};
 use radarnav::render::{Figure, save_png};
 use radarnav::scenario::{BUILTIN_SCENARIOS, NAV_SUITE};
 use radarnav::setup::{Robot, Scenario};
-use radarnav::sim::{RunSettings, Simulation};
+use radarnav::sim::{Observer, RunSettings, ScanEvent, Simulation, Step};
 use radarnav::slam::SlamConfig;
 use radarnav::sweep::{Shard, Sweep};
 use radarnav::vehicle::{DriveCommand, Twist};
@@ -143,13 +144,42 @@ struct Owned {
     robot: Robot,
 }
 
+/// The simulation and, for imaging radars, the renderer of their rotations.
+struct Live<'a> {
+    sim: Simulation<'a>,
+    imager: Option<RadarImager<'a>>,
+}
+
 self_cell::self_cell!(
     struct Running {
         owner: Owned,
         #[not_covariant]
-        dependent: Simulation,
+        dependent: Live,
     }
 );
+
+/// What a step tells the maps and the imager.
+struct StepObserver<'o, 'w> {
+    mappers: &'o mut [Mapper],
+    imager: Option<&'o mut RadarImager<'w>>,
+    images: &'o mut Vec<SweepImage>,
+}
+
+impl Observer for StepObserver<'_, '_> {
+    type Error = std::convert::Infallible;
+    fn on_scan(&mut self, event: &ScanEvent<'_>) -> Result<(), Self::Error> {
+        if let Some(imager) = self.imager.as_deref_mut() {
+            imager.on_scan(event.sensor, event.scan.stamp);
+        }
+        self.mappers.on_scan(event)
+    }
+    fn on_step(&mut self, step: &Step) -> Result<(), Self::Error> {
+        if let Some(imager) = self.imager.as_deref_mut() {
+            self.images.extend(imager.on_step(step));
+        }
+        self.mappers.on_step(step)
+    }
+}
 
 /// One robot of a scenario, driven from Python.
 #[pyclass(name = "Sim", module = "radarnav._core", unsendable)]
@@ -163,6 +193,8 @@ struct PySim {
     command: Rc<Cell<DriveCommand>>,
     running: Running,
     mappers: Vec<Mapper>,
+    /// The latest finished rotation of each imaging radar (sensor index, image).
+    images: Vec<SweepImage>,
     trail: Vec<DVec2>,
 }
 
@@ -188,7 +220,10 @@ impl PySim {
             robot,
         };
         let running = Running::try_new(owned, |o| {
-            Simulation::new(&o.scenario.world, &o.robot, Box::new(remote), settings)
+            Ok::<_, radarnav::sim::SimError>(Live {
+                sim: Simulation::new(&o.scenario.world, &o.robot, Box::new(remote), settings)?,
+                imager: RadarImager::new(&o.scenario.world, &o.robot, seed),
+            })
         })
         .map_err(value_err)?;
         let robot = &running.borrow_owner().robot;
@@ -200,6 +235,7 @@ impl PySim {
             .map_err(value_err)?;
         self.trail = vec![robot.start.xy()];
         self.mappers = mappers;
+        self.images.clear();
         self.command = command;
         self.running = running;
         self.seed = seed;
@@ -230,16 +266,30 @@ impl PySim {
         let i = self.sensor_index(name)?;
         Ok(self
             .running
-            .with_dependent(|_, sim| sim.latest_scan(i).cloned()))
+            .with_dependent(|_, live| live.sim.latest_scan(i).cloned()))
     }
 
     /// One step with the command set; `false` once the run is over.
     fn one_step(&mut self) -> bool {
         let Self {
-            running, mappers, ..
+            running,
+            mappers,
+            images,
+            ..
         } = self;
-        let Ok(more) = running.with_dependent_mut(|_, sim| sim.step(mappers.as_mut_slice()));
-        let p = self.running.with_dependent(|_, sim| sim.truth().xy());
+        let mut done = Vec::new();
+        let Ok(more) = running.with_dependent_mut(|_, live| {
+            live.sim.step(&mut StepObserver {
+                mappers: mappers.as_mut_slice(),
+                imager: live.imager.as_mut(),
+                images: &mut done,
+            })
+        });
+        for image in done {
+            images.retain(|i| i.sensor != image.sensor);
+            images.push(image);
+        }
+        let p = self.running.with_dependent(|_, live| live.sim.truth().xy());
         if self.trail.last() != Some(&p) {
             self.trail.push(p);
         }
@@ -251,11 +301,12 @@ impl PySim {
 impl PySim {
     /// A simulation of `robot` (default: the mission's, else the first) in `scenario`.
     ///
-    /// `seed` and `duration` default to the scenario's `[sim]`; `sensors` keeps only the
-    /// named sensors; `rate_hz` sets every kept sensor's scan rate; `slam` runs the localiser
+    /// `seed` and `duration` default to the scenario's `[sim]`; `add_sensors` mounts presets
+    /// beside the robot's sensors (an imaging radar's rotations come from `image`); `sensors`
+    /// keeps only the named sensors; `rate_hz` sets every kept sensor's scan rate; `slam` runs the localiser
     /// on the named sensor; `maps` builds an occupancy grid from each named sensor.
     #[new]
-    #[pyo3(signature = (scenario, robot = None, seed = None, duration = None, sensors = None, rate_hz = None, slam = None, maps = None))]
+    #[pyo3(signature = (scenario, robot = None, seed = None, duration = None, sensors = None, rate_hz = None, slam = None, maps = None, add_sensors = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         scenario: &Bound<'_, PyAny>,
@@ -266,6 +317,7 @@ impl PySim {
         rate_hz: Option<f64>,
         slam: Option<&str>,
         maps: Option<Vec<String>>,
+        add_sensors: Option<Vec<String>>,
     ) -> PyResult<Self> {
         let scenario = match scenario.cast::<PyScenario>() {
             Ok(s) => Arc::clone(&s.get().inner),
@@ -273,6 +325,9 @@ impl PySim {
         };
         let mission_robot = scenario.mission.as_ref().and_then(|m| m.robot.as_deref());
         let mut r = robot_of(&scenario, robot.or(mission_robot))?.clone();
+        if let Some(extra) = &add_sensors {
+            r = radarnav::run::with_sensors(&r, extra).map_err(value_err)?;
+        }
         if let Some(keep) = &sensors {
             for name in keep {
                 if r.sensor(name).is_none() {
@@ -319,7 +374,10 @@ impl PySim {
             robot: r.clone(),
         };
         let running = Running::try_new(owned, |o| {
-            Simulation::new(&o.scenario.world, &o.robot, Box::new(remote), settings)
+            Ok::<_, radarnav::sim::SimError>(Live {
+                sim: Simulation::new(&o.scenario.world, &o.robot, Box::new(remote), settings)?,
+                imager: None,
+            })
         })
         .map_err(value_err)?;
         let mut sim = Self {
@@ -331,6 +389,7 @@ impl PySim {
             command: Rc::new(Cell::new(DriveCommand::STOP)),
             running,
             mappers: Vec::new(),
+            images: Vec::new(),
             trail: Vec::new(),
         };
         sim.start(seed, None)?;
@@ -361,12 +420,14 @@ impl PySim {
     /// of those steps bumped. Stops early when the run is over.
     fn advance(&mut self, v: f64, omega: f64, seconds: f64) -> bool {
         self.command.set(DriveCommand::Twist(Twist { v, omega }));
-        let dt = self.running.with_dependent(|_, sim| sim.settings().dt);
+        let dt = self
+            .running
+            .with_dependent(|_, live| live.sim.settings().dt);
         let steps = ((seconds / dt).round() as u64).max(1);
         let mut bumped = false;
         for _ in 0..steps {
             let more = self.one_step();
-            bumped |= self.running.with_dependent(|_, sim| sim.bumped());
+            bumped |= self.running.with_dependent(|_, live| live.sim.bumped());
             if !more {
                 break;
             }
@@ -377,7 +438,7 @@ impl PySim {
     /// Simulation time, s.
     #[getter]
     fn time(&self) -> f64 {
-        self.running.with_dependent(|_, sim| sim.time())
+        self.running.with_dependent(|_, live| live.sim.time())
     }
 
     /// Step, s.
@@ -395,19 +456,19 @@ impl PySim {
     /// Whether time is up.
     #[getter]
     fn done(&self) -> bool {
-        self.running.with_dependent(|_, sim| sim.done())
+        self.running.with_dependent(|_, live| live.sim.done())
     }
 
     /// Whether the last step's move was refused by a collision.
     #[getter]
     fn bumped(&self) -> bool {
-        self.running.with_dependent(|_, sim| sim.bumped())
+        self.running.with_dependent(|_, live| live.sim.bumped())
     }
 
     /// Refused moves so far.
     #[getter]
     fn bumps(&self) -> usize {
-        self.running.with_dependent(|_, sim| sim.bump_count())
+        self.running.with_dependent(|_, live| live.sim.bump_count())
     }
 
     /// Sensor names, in order.
@@ -436,19 +497,19 @@ impl PySim {
     /// The true pose (x, y, yaw rad).
     fn pose(&self) -> (f64, f64, f64) {
         self.running
-            .with_dependent(|_, sim| pose_tuple(&sim.truth()))
+            .with_dependent(|_, live| pose_tuple(&live.sim.truth()))
     }
 
     /// The odometry's estimate (x, y, yaw rad).
     fn odometry(&self) -> (f64, f64, f64) {
         self.running
-            .with_dependent(|_, sim| pose_tuple(&sim.odometry().pose))
+            .with_dependent(|_, live| pose_tuple(&live.sim.odometry().pose))
     }
 
     /// The localiser's estimate (x, y, yaw rad); `None` without `slam`.
     fn slam(&self) -> Option<(f64, f64, f64)> {
         self.running
-            .with_dependent(|_, sim| sim.slam().map(|p| pose_tuple(&p)))
+            .with_dependent(|_, live| live.sim.slam().map(|p| pose_tuple(&p)))
     }
 
     /// Whether the robot could stand at (x, y, yaw) without touching a solid.
@@ -502,6 +563,42 @@ impl PySim {
             d.set_item("echo_start", PyArray1::from_vec(py, s.echo_start))?;
         }
         d.set_item("ranges", PyArray1::from_vec(py, s.ranges))?;
+        Ok(Some(d))
+    }
+
+    /// The latest finished rotation of imaging radar `name` (e.g. an added `navtech_cts350x`)
+    /// in the Oxford layout: `power` (uint8, azimuths x range bins), `bin_size` (m),
+    /// `azimuths` (rad, clockwise from the sensor's x axis), `timestamps_us`, and its
+    /// k-strongest `detections` (world x, y, z; range m; azimuth rad; power). `None` before the
+    /// first rotation ends.
+    fn image<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let i = self.sensor_index(name)?;
+        let Some(sweep) = self.images.iter().find(|s| s.sensor == i) else {
+            return Ok(None);
+        };
+        let im = &sweep.image;
+        let d = PyDict::new(py);
+        d.set_item(
+            "power",
+            PyArray1::from_vec(py, im.power.clone()).reshape([im.rows(), im.bins])?,
+        )?;
+        d.set_item("bin_size", im.bin_size)?;
+        let az: Vec<f64> = (0..im.rows()).map(|k| im.azimuth(k)).collect();
+        d.set_item("azimuths", PyArray1::from_vec(py, az))?;
+        d.set_item(
+            "timestamps_us",
+            PyArray1::from_vec(py, im.timestamps_us.clone()),
+        )?;
+        let det: Vec<f64> = sweep
+            .detections
+            .iter()
+            .flat_map(|(det, p)| [p.x, p.y, p.z, det.range, det.azimuth, f64::from(det.power)])
+            .collect();
+        let rows = sweep.detections.len();
+        d.set_item(
+            "detections",
+            PyArray1::from_vec(py, det).reshape([rows, 6])?,
+        )?;
         Ok(Some(d))
     }
 
@@ -559,7 +656,7 @@ impl PySim {
             .map_err(|m| value_err(format!("pixels: {m}")))? as u32;
         let mut fig = Figure::of_world(&self.scenario.world, None, pixels).map_err(value_err)?;
         fig.draw_path(&self.trail, [0, 160, 0], 2.0, "path");
-        let truth = self.running.with_dependent(|_, sim| sim.truth());
+        let truth = self.running.with_dependent(|_, live| live.sim.truth());
         fig.draw_robot(&truth, self.robot.vehicle);
         save_png(&fig.finish(&self.scenario.name), Path::new(path))
             .map_err(|e| PyOSError::new_err(format!("{path}: {e}")))
@@ -577,7 +674,7 @@ impl PySim {
             .map_err(|m| value_err(format!("pixels: {m}")))? as u32;
         let mut fig = Figure::of_world(&self.scenario.world, None, pixels).map_err(value_err)?;
         fig.draw_path(&self.trail, [0, 160, 0], 2.0, "path");
-        let truth = self.running.with_dependent(|_, sim| sim.truth());
+        let truth = self.running.with_dependent(|_, live| live.sim.truth());
         fig.draw_robot(&truth, self.robot.vehicle);
         let pixmap = fig.finish(&self.scenario.name);
         let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
@@ -592,7 +689,7 @@ impl PySim {
 
     /// What the run did so far, as the JSON text of `summary.json`'s run part.
     fn summary_json(&self) -> String {
-        let s = self.running.with_dependent(|_, sim| sim.summary());
+        let s = self.running.with_dependent(|_, live| live.sim.summary());
         serde_json::to_string(&s).unwrap_or_default()
     }
 }

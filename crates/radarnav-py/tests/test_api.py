@@ -106,3 +106,15 @@ def test_run_writes_the_cli_bytes(tmp_path, cli):
     )
     for name in ["trajectory.csv", "truth.tum", "odometry.tum", "scans/radar.rnscan"]:
         assert filecmp.cmp(py / name, rs / name, shallow=False), name
+
+
+def test_an_imaging_radar_gives_oxford_power_images():
+    sim = radarnav.Sim("foliage-wall", seed=1, add_sensors=["navtech_cts350x"])
+    assert sim.image("navtech_cts350x") is None
+    sim.advance(0.2, 0.0, 0.6)  # one rotation takes 0.25 s at 4 Hz
+    im = sim.image("navtech_cts350x")
+    assert im["power"].dtype == np.uint8 and im["power"].shape == (400, 3768)
+    assert im["bin_size"] == pytest.approx(0.0438, abs=1e-4)
+    assert im["detections"].shape[1] == 6 and len(im["detections"]) > 0
+    # The wall 5 m ahead is brighter than the noise floor around it.
+    assert im["power"].max() > 3 * np.median(im["power"])
