@@ -44,13 +44,16 @@ def run_on_ray(
     address: Optional[str] = None,
     shards: Optional[int] = None,
     out: str = "out/sweep",
+    cpus_per_shard: int = 1,
     init_kwargs: Optional[dict] = None,
 ) -> list:
     """Runs the sweep at ``spec`` as ``shards`` Ray tasks and merges them into ``out``.
 
     ``address``: a Ray cluster (``"auto"``, ``"ray://host:10001"``); ``None`` starts a local
-    Ray on this machine (dashboard off). ``shards`` defaults to the cluster's CPUs divided by
-    4, at least 1, at most the number of runs. Returns the merged files' paths.
+    Ray on this machine (dashboard off). Each task reserves ``cpus_per_shard`` CPUs and runs
+    its shard's runs on that many threads. ``shards`` defaults to the cluster's CPUs divided
+    by ``cpus_per_shard``, at least 1, at most the number of runs. Returns the merged files'
+    paths.
     """
     import ray
 
@@ -63,11 +66,16 @@ def run_on_ray(
         started_here = True
     try:
         runs = sweep_runs(sweep)
+        cpus_per_shard = max(1, int(cpus_per_shard))
         if shards is None:
             cpus = int(ray.cluster_resources().get("CPU", 1))
-            shards = max(1, cpus // 4)
+            shards = max(1, cpus // cpus_per_shard)
         shards = max(1, min(int(shards), runs))
-        task = ray.remote(num_cpus=1)(_shard)
+        # A shard runs its runs on rayon's pool: size it to the CPUs the task holds.
+        task = ray.remote(
+            num_cpus=cpus_per_shard,
+            runtime_env={"env_vars": {"RAYON_NUM_THREADS": str(cpus_per_shard)}},
+        )(_shard)
         pending = [task.remote(sweep, i, shards) for i in range(shards)]
         os.makedirs(out, exist_ok=True)
         for i, text in enumerate(ray.get(pending)):
