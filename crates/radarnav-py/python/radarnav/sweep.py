@@ -1,10 +1,10 @@
-"""Sweeps on Ray: each shard of a sweep spec runs as one Ray task (on all of its node's
-cores), the shard files are written on the driver and merged into ``sweep.csv``,
+"""Sweeps on Ray: each shard of a sweep spec runs as one Ray task (on ``cpus_per_shard``
+threads), the shard files are written on the driver and merged into ``sweep.csv``,
 ``sweep_groups.csv`` and ``sweep.png``, byte for byte what ``radarnav sweep SPEC`` writes.
 
     from radarnav.sweep import run_on_ray
-    run_on_ray("sweeps/bug.toml", out="out/sweep")                 # a local ray.init()
-    run_on_ray("sweeps/bug.toml", address="ray://head:10001", shards=16, out="out/sweep")
+    run_on_ray("sweeps/bug-maps.toml", out="out/sweep")                 # a local ray.init()
+    run_on_ray("sweeps/bug-maps.toml", address="ray://head:10001", shards=16, out="out/sweep")
 
 The spec travels to the workers with its scenario files inside; meshes and teleop files a
 scenario names must be readable at the same path on every node (a shared file system).
