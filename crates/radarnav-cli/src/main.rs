@@ -544,7 +544,7 @@ fn run(cli: Cli) -> Result<()> {
                 .then(|| Path::new(&scenario).parent().map(Path::to_owned))
                 .flatten();
             let stop = run_cmd::stop_flag()?;
-            let interrupted = run_cmd::run(&run_cmd::RunArgs {
+            let interrupted = run_cmd::run(&radarnav::run::RunRequest {
                 scenario: &s,
                 base: base.as_deref(),
                 out: &out,
@@ -556,7 +556,9 @@ fn run(cli: Cli) -> Result<()> {
                 ros2_bag,
                 pixels,
                 maps: (!no_maps).then_some(maps.as_slice()),
-                map_pose: &map_pose,
+                map_pose: radarnav::map::PoseSource::parse(&map_pose).with_context(|| {
+                    format!("--map-pose `{map_pose}`: expected `truth`, `odometry` or `slam`")
+                })?,
                 map_resolution,
                 map_max_free_range,
                 add_sensors: &add_sensor,

@@ -2,16 +2,13 @@
 //! simulation loop.
 
 use std::io::{IsTerminal, Write};
-use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use radarnav::Scenario;
-use radarnav::limits::budget::Budget;
-use radarnav::map::PoseSource;
-use radarnav::run::{Progress, RunRequest, drive, plan, record_run, settings};
+use radarnav::run::{Progress, RunError, RunRequest, drive, plan, record_run, settings};
 use radarnav::sim::{NoObserver, Simulation};
 
 fn progress_bar(steps: u64, dt: f64) -> ProgressBar {
@@ -51,63 +48,9 @@ fn on_progress(bar: &ProgressBar) -> impl FnMut(Progress) + '_ {
     }
 }
 
-/// Options of `radarnav run`.
-pub struct RunArgs<'a> {
-    pub scenario: &'a Scenario,
-    pub base: Option<&'a Path>,
-    pub out: &'a Path,
-    pub robot: Option<&'a str>,
-    pub teleop: Option<&'a Path>,
-    pub seed: Option<u64>,
-    pub duration: Option<f64>,
-    pub mcap: bool,
-    /// Write the rosbag2 recording.
-    pub ros2_bag: bool,
-    pub pixels: u32,
-    /// Map specs (`None`: no maps; empty: one per sensor).
-    pub maps: Option<&'a [String]>,
-    pub map_pose: &'a str,
-    pub map_resolution: f64,
-    pub map_max_free_range: f64,
-    /// Presets to mount on the robot besides its own sensors.
-    pub add_sensors: &'a [String],
-    /// The localiser's sensor instead of the scenario's (`none`: no localiser).
-    pub slam_sensor: Option<&'a str>,
-    /// Memory and output limits.
-    pub budget: Budget,
-    /// Set by a signal: the run ends at the end of the step and its files are finished.
-    pub stop: &'a AtomicBool,
-}
-
 /// `radarnav run`; `true` when a signal cut it short (its files are whole all the same).
-pub fn run(a: &RunArgs<'_>) -> Result<bool> {
-    let s = a.scenario;
-    let map_pose = PoseSource::parse(a.map_pose).with_context(|| {
-        format!(
-            "--map-pose `{}`: expected `truth`, `odometry` or `slam`",
-            a.map_pose
-        )
-    })?;
-    let request = RunRequest {
-        scenario: s,
-        base: a.base,
-        out: a.out,
-        robot: a.robot,
-        teleop: a.teleop,
-        seed: a.seed,
-        duration: a.duration,
-        mcap: a.mcap,
-        ros2_bag: a.ros2_bag,
-        pixels: a.pixels,
-        maps: a.maps,
-        map_pose,
-        map_resolution: a.map_resolution,
-        map_max_free_range: a.map_max_free_range,
-        add_sensors: a.add_sensors,
-        slam_sensor: a.slam_sensor,
-        budget: a.budget,
-        stop: a.stop,
-    };
+pub fn run(request: &RunRequest<'_>) -> Result<bool> {
+    let (s, a) = (request.scenario, request);
     let settings = settings(s, a.seed, a.duration);
     let bar = progress_bar(
         (settings.duration / settings.dt).round() as u64,
@@ -132,12 +75,10 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
             }
         }
     };
-    let report = record_run(&request, &mut progress).map_err(|e| match &e {
-        radarnav::run::RunError::Request(m) if m.starts_with("add sensor") => {
-            anyhow::anyhow!("--{}", m.replacen("add sensor", "add-sensor", 1))
-        }
-        radarnav::run::RunError::Request(m) if m.starts_with("slam sensor") => {
-            anyhow::anyhow!("--{}", m.replacen("slam sensor", "slam-sensor", 1))
+    // The library names the request's fields; here they are flags.
+    let report = record_run(request, &mut progress).map_err(|e| match &e {
+        RunError::AddSensor { .. } | RunError::SlamSensor { .. } => {
+            anyhow::anyhow!("--{}", e.to_string().replacen(' ', "-", 1))
         }
         _ => anyhow::Error::new(e),
     })?;
@@ -229,12 +170,9 @@ pub fn run(a: &RunArgs<'_>) -> Result<bool> {
 pub fn bench_sim(s: &Scenario, seconds: f64, stop: &AtomicBool) -> Result<()> {
     let plan = plan(s, None, None, None, true, s.sim.seed)?;
     let settings = settings(s, None, Some(seconds));
-    // The localiser runs only where the mission steers on it: the benchmark times the
-    // simulation and its sensors.
-    let mut robot = plan.robot.clone();
-    if s.mission.as_ref().and_then(|m| m.pose()) != Some(PoseSource::Slam) {
-        robot.slam = None;
-    }
+    // The benchmark times the simulation and its sensors, and the localiser only where the
+    // mission steers on it.
+    let robot = radarnav::run::batch_robot(&plan, s);
     let mut sim = Simulation::new(&s.world, &robot, plan.controller, settings)?;
     let bar = progress_bar(sim.total_steps(), settings.dt);
     let Ok((summary, wall)) = drive(&mut sim, &mut NoObserver, stop, &mut on_progress(&bar));

@@ -206,6 +206,13 @@ impl PySim {
     fn start(&mut self, seed: u64, start: Option<(f64, f64, f64)>) -> PyResult<()> {
         let mut robot = self.robot.clone();
         if let Some((x, y, yaw)) = start {
+            use radarnav::limits::{COORD, YAW};
+            let yaw_deg = yaw.to_degrees();
+            for (what, v, limit) in [("x", x, &COORD), ("y", y, &COORD), ("yaw", yaw_deg, &YAW)] {
+                limit
+                    .check(v)
+                    .map_err(|m| value_err(format!("start {what}: {m}")))?;
+            }
             robot.start = Pose::new(x, y, 0.0, yaw);
         }
         let remote = Remote::new(1.0 / self.scenario.sim.dt);
@@ -651,14 +658,7 @@ impl PySim {
     /// Writes a PNG of the world with the path driven so far and the robot where it is.
     #[pyo3(signature = (path, pixels = 800))]
     fn figure(&self, path: &str, pixels: u32) -> PyResult<()> {
-        let pixels = radarnav::limits::PIXELS
-            .check(f64::from(pixels))
-            .map_err(|m| value_err(format!("pixels: {m}")))? as u32;
-        let mut fig = Figure::of_world(&self.scenario.world, None, pixels).map_err(value_err)?;
-        fig.draw_path(&self.trail, [0, 160, 0], 2.0, "path");
-        let truth = self.running.with_dependent(|_, live| live.sim.truth());
-        fig.draw_robot(&truth, self.robot.vehicle);
-        save_png(&fig.finish(&self.scenario.name), Path::new(path))
+        save_png(&self.world_figure(pixels)?, Path::new(path))
             .map_err(|e| PyOSError::new_err(format!("{path}: {e}")))
     }
 
@@ -669,14 +669,7 @@ impl PySim {
         py: Python<'py>,
         pixels: u32,
     ) -> PyResult<Bound<'py, numpy::PyArray3<u8>>> {
-        let pixels = radarnav::limits::PIXELS
-            .check(f64::from(pixels))
-            .map_err(|m| value_err(format!("pixels: {m}")))? as u32;
-        let mut fig = Figure::of_world(&self.scenario.world, None, pixels).map_err(value_err)?;
-        fig.draw_path(&self.trail, [0, 160, 0], 2.0, "path");
-        let truth = self.running.with_dependent(|_, live| live.sim.truth());
-        fig.draw_robot(&truth, self.robot.vehicle);
-        let pixmap = fig.finish(&self.scenario.name);
+        let pixmap = self.world_figure(pixels)?;
         let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
         // The figure is opaque, so its premultiplied RGBA is plain RGB and alpha.
         let rgb: Vec<u8> = pixmap
@@ -695,6 +688,19 @@ impl PySim {
 }
 
 impl PySim {
+    /// The world with the path driven so far and the robot where it is, `pixels` on its
+    /// longer side (range-checked).
+    fn world_figure(&self, pixels: u32) -> PyResult<radarnav::render::Pixmap> {
+        let pixels = radarnav::limits::PIXELS
+            .check(f64::from(pixels))
+            .map_err(|m| value_err(format!("pixels: {m}")))? as u32;
+        let mut fig = Figure::of_world(&self.scenario.world, None, pixels).map_err(value_err)?;
+        fig.draw_path(&self.trail, [0, 160, 0], 2.0, "path");
+        let truth = self.running.with_dependent(|_, live| live.sim.truth());
+        fig.draw_robot(&truth, self.robot.vehicle);
+        Ok(fig.finish(&self.scenario.name))
+    }
+
     fn mapper(&self, name: &str) -> PyResult<&Mapper> {
         self.mappers
             .iter()

@@ -68,6 +68,8 @@ def test_reset_to_a_blocked_start_is_an_error():
     assert not sim.is_free(14.0, 6.0, 0.0)
     with pytest.raises(ValueError, match="box"):
         sim.reset(start=(14.0, 6.0, 0.0))
+    with pytest.raises(ValueError, match="start x: expected -5000 to 5000 m"):
+        sim.reset(start=(1e308, 6.0, 0.0))
 
 
 def test_maps_are_class_grids(tmp_path):

@@ -71,5 +71,7 @@ def test_driving_at_the_goal_reaches_it():
 def test_bad_options_are_clear_errors():
     with pytest.raises(ValueError, match="pose must be"):
         gym.make("radarnav/Navigate-v0", pose="gps")
+    with pytest.raises(ValueError, match="goal_tolerance must be"):
+        gym.make("radarnav/Navigate-v0", goal_tolerance=0.0)
     with pytest.raises(ValueError, match="has no goal"):
         gym.make("radarnav/Navigate-v0", scenario="foliage-wall")

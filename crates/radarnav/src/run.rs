@@ -22,9 +22,27 @@ use crate::slam::SlamConfig;
 /// A run that cannot be made or finished.
 #[derive(Debug, Error)]
 pub enum RunError {
-    /// A request that does not fit the scenario (no such robot, sensor, preset, map).
+    /// A request that does not fit the scenario (no such robot, a map asked for twice).
     #[error("{0}")]
     Request(String),
+    /// A sensor to add that cannot be added.
+    #[error("add sensor `{name}`: {why}")]
+    AddSensor {
+        /// The preset asked for.
+        name: String,
+        /// Why not.
+        why: String,
+    },
+    /// The localiser's sensor is not on the robot.
+    #[error("slam sensor `{name}`: robot `{robot}` has no such sensor; it has: {known}, or `none`")]
+    SlamSensor {
+        /// The sensor asked for.
+        name: String,
+        /// The robot.
+        robot: String,
+        /// Its sensors, comma-separated.
+        known: String,
+    },
     /// A teleop file that cannot be read.
     #[error("reading teleop file {path}: {cause}")]
     Teleop {
@@ -137,21 +155,32 @@ pub fn plan<'a>(
     })
 }
 
+/// The plan's robot for a batch run (sweeps, benchmarks): its localiser kept only where the
+/// scenario's mission steers on it, so runs spend no time on estimates nobody reads.
+pub fn batch_robot(plan: &Plan<'_>, s: &Scenario) -> Robot {
+    let mut robot = plan.robot.clone();
+    if s.mission.as_ref().and_then(|m| m.pose()) != Some(PoseSource::Slam) {
+        robot.slam = None;
+    }
+    robot
+}
+
 /// `robot` with the presets `names` added (see [`Robot::with_preset_mount`]).
 pub fn with_sensors(robot: &Robot, names: &[String]) -> Result<Robot, RunError> {
     let mut r = robot.clone();
     for name in names {
         if r.sensor(name).is_some() {
-            return Err(RunError::Request(format!(
-                "add sensor `{name}`: robot `{}` already has a sensor of that name",
-                r.name
-            )));
+            return Err(RunError::AddSensor {
+                name: name.clone(),
+                why: format!("robot `{}` already has a sensor of that name", r.name),
+            });
         }
-        let s = robot.with_preset_mount(name).ok_or_else(|| {
-            RunError::Request(format!(
-                "add sensor `{name}`: not a preset (see `radarnav presets`)"
-            ))
-        })?;
+        let s = robot
+            .with_preset_mount(name)
+            .ok_or_else(|| RunError::AddSensor {
+                name: name.clone(),
+                why: "not a preset (see `radarnav presets`)".into(),
+            })?;
         r.sensors.push(s);
     }
     Ok(r)
@@ -338,12 +367,14 @@ pub fn record_run(
         Some("none") => robot.slam = None,
         Some(name) => {
             let i = (robot.sensors.iter().position(|s| s.name == name)).ok_or_else(|| {
-                let known: Vec<&str> = robot.sensors.iter().map(|s| s.name.as_str()).collect();
-                RunError::Request(format!(
-                    "slam sensor `{name}`: robot `{}` has no such sensor; it has: {}, or `none`",
-                    robot.name,
-                    known.join(", ")
-                ))
+                RunError::SlamSensor {
+                    name: name.to_owned(),
+                    robot: robot.name.clone(),
+                    known: (robot.sensors.iter())
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                }
             })?;
             let c = robot.slam.unwrap_or(SlamConfig::for_sensor(i));
             robot.slam = Some(SlamConfig { sensor: i, ..c });

@@ -60,8 +60,16 @@ class NavigateEnv(gym.Env):
             raise ValueError(f"pose must be truth, odometry or slam, not {pose!r}")
         if not 0.01 <= control_hz <= 1000.0:
             raise ValueError(f"control_hz must be in 0.01..1000, not {control_hz}")
-        if max_steps < 1:
-            raise ValueError(f"max_steps must be >= 1, not {max_steps}")
+        if not 1 <= max_steps <= 10_000_000:
+            raise ValueError(f"max_steps must be in 1..10000000, not {max_steps}")
+        if not 0.01 <= goal_tolerance <= 100.0:
+            raise ValueError(f"goal_tolerance must be in 0.01..100 m, not {goal_tolerance}")
+        if goal_scale is not None and not 0.01 <= goal_scale <= 1e4:
+            raise ValueError(f"goal_scale must be in 0.01..10000 m, not {goal_scale}")
+        for name, v in [("goal_reward", goal_reward), ("bump_penalty", bump_penalty),
+                        ("step_cost", step_cost)]:
+            if not math.isfinite(v):
+                raise ValueError(f"{name} must be a finite number, not {v}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
         self.scenario = scenario

@@ -473,15 +473,7 @@ pub fn run_one(sweep: &Sweep, point: RunPoint, stop: &AtomicBool) -> Result<RunR
     let base = Path::new(&sweep.scenarios[point.scenario].file).parent();
     let plan = crate::run::plan(&scenario, None, None, base, false, point.seed)
         .map_err(|e| fail(e.to_string()))?;
-    let mut robot = plan.robot.clone();
-    let steers_on_slam = scenario
-        .mission
-        .as_ref()
-        .and_then(|m| m.pose())
-        .is_some_and(|p| p == crate::map::PoseSource::Slam);
-    if !steers_on_slam {
-        robot.slam = None;
-    }
+    let robot = crate::run::batch_robot(&plan, &scenario);
     let settings = RunSettings {
         seed: point.seed,
         ..RunSettings::of(&scenario)

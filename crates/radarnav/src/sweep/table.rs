@@ -249,20 +249,22 @@ fn field(s: &str) -> String {
     }
 }
 
+/// Appends `,field` for each of `fields`.
+fn push_fields(out: &mut String, fields: &[String]) {
+    for f in fields {
+        out.push(',');
+        out.push_str(&field(f));
+    }
+}
+
 /// One row per run: `sweep.csv`.
 pub fn runs_csv(m: &Merged) -> String {
     let mut out = String::from("run,scenario");
-    for k in &m.keys {
-        out.push(',');
-        out.push_str(&field(k));
-    }
+    push_fields(&mut out, &m.keys);
     out.push_str(",seed,outcome,time_s,distance_m,bumps,odometry_error_m,slam_error_m\n");
     for r in &m.rows {
         out.push_str(&format!("{},{}", r.run, field(&r.scenario)));
-        for p in &r.params {
-            out.push(',');
-            out.push_str(&field(p));
-        }
+        push_fields(&mut out, &r.params);
         out.push_str(&format!(
             ",{},{},{:.3},{:.3},{},{:.4},{}\n",
             r.seed,
@@ -351,17 +353,11 @@ pub fn groups(m: &Merged) -> Vec<Group> {
 /// One row per scenario and grid point: `sweep_groups.csv`.
 pub fn groups_csv(m: &Merged) -> String {
     let mut out = String::from("scenario");
-    for k in &m.keys {
-        out.push(',');
-        out.push_str(&field(k));
-    }
+    push_fields(&mut out, &m.keys);
     out.push_str(",runs,succeeded,success_rate,no_path,mean_time_s,mean_distance_m,mean_bumps\n");
     for g in groups(m) {
         out.push_str(&field(&g.scenario));
-        for p in &g.params {
-            out.push(',');
-            out.push_str(&field(p));
-        }
+        push_fields(&mut out, &g.params);
         out.push_str(&format!(
             ",{},{},{:.3},{},{:.3},{:.3},{:.3}\n",
             g.runs,
