@@ -1,6 +1,7 @@
 //! The radar signal's cost (DESIGN §7): one Navtech CTS350-X power image of foliage-wall
 //! (target ≤ 25 ms on one core), and a multi-echo (`all`) scan of 360 azimuths against the
-//! thesis scan of the same radar (target ≤ 2×), also with the thesis' side beams.
+//! thesis scan of the same radar (target ≤ 2×), also with the thesis' side beams, and a
+//! first-echo scan.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use radarnav::sensor::image::power_image;
@@ -34,6 +35,8 @@ fn signal(c: &mut Criterion) {
     let thesis = preset("radar_thesis").expect("preset");
     let mut all = thesis.clone();
     all.signal.return_mode = ReturnMode::All;
+    let mut first = thesis.clone();
+    first.signal.return_mode = ReturnMode::First;
     // The thesis' side beams in `all` mode: uniform selection walks only the drawn ray.
     let mut sides = preset("radar_thesis_n100").expect("preset");
     sides.signal.return_mode = ReturnMode::All;
@@ -41,6 +44,7 @@ fn signal(c: &mut Criterion) {
     for (name, config) in [
         ("radar_thesis-thesis", &thesis),
         ("radar_thesis-all", &all),
+        ("radar_thesis-first", &first),
         ("radar_thesis_n100-all", &sides),
     ] {
         g.bench_function(name, |b| {

@@ -106,6 +106,24 @@ pub struct EchoModel {
     pub dynamic_range_db: f64,
     /// Specular bounces followed per ray.
     pub max_bounces: u8,
+    /// `(n, threshold_db)` when the caller keeps only the first `n` echoes (by range) at or
+    /// above `threshold_db`: the walk then stops once it has them, since every echo found
+    /// later lies at or beyond their range and sorts after them (`None`: every echo).
+    pub wanted: Option<(usize, f64)>,
+}
+
+/// Whether `found` (one ray's echoes so far) holds `wanted`'s echoes within range `upto`:
+/// then nothing the ray meets further on can be among the first `n`.
+fn have_wanted(found: &[Echo], upto: f64, wanted: Option<(usize, f64)>) -> bool {
+    let Some((n, threshold)) = wanted else {
+        return false;
+    };
+    found.len() >= n
+        && found
+            .iter()
+            .filter(|e| e.power_db >= threshold && e.range <= upto)
+            .count()
+            >= n
 }
 
 /// A volume echo is cut into pieces of at most this depth, m, so that the range law, taken at
@@ -191,6 +209,7 @@ impl EchoTracer {
         out: &mut Vec<Echo>,
     ) -> f64 {
         self.legs.clear();
+        let start = out.len();
         let direct = Leg {
             ray: *ray,
             path: 0.0,
@@ -200,20 +219,22 @@ impl EchoTracer {
             t_max,
         };
         // The direct leg first, then its mirrored legs, last found first.
-        let first_cos = self.walk_leg(world, fan, &direct, model, out);
+        let first_cos = self.walk_leg(world, fan, &direct, model, start, out);
         while let Some(leg) = self.legs.pop() {
-            self.walk_leg(world, None, &leg, model, out);
+            self.walk_leg(world, None, &leg, model, start, out);
         }
         first_cos.unwrap_or(1.0)
     }
 
-    /// Walks one leg; returns the incidence cosine at its first surface.
+    /// Walks one leg (the ray's echoes begin at `out[start]`); returns the incidence cosine
+    /// at its first surface.
     fn walk_leg(
         &mut self,
         world: &World,
         fan: Option<(&Fan, f64)>,
         leg: &Leg,
         model: &EchoModel,
+        start: usize,
         out: &mut Vec<Echo>,
     ) -> Option<f64> {
         let ray = leg.ray;
@@ -248,6 +269,11 @@ impl EchoTracer {
             }
         };
         loop {
+            // Echoes are found in range order along a leg, and a mirrored leg's lie beyond
+            // its bounce: past the wanted ones, the walk is over.
+            if have_wanted(&out[start..], leg.path + t, model.wanted) {
+                return first_cos;
+            }
             let (exit_slot, t_exit) = active
                 .iter()
                 .enumerate()
@@ -464,6 +490,7 @@ mod tests {
             range_law: RangeLaw::R2,
             dynamic_range_db: 80.0,
             max_bounces: 2,
+            wanted: None,
         };
         let mut t = EchoTracer::default();
         let (mut a, mut b) = (Vec::new(), Vec::new());
@@ -500,6 +527,7 @@ mod tests {
             range_law: law,
             dynamic_range_db: 200.0,
             max_bounces: 2,
+            wanted: None,
         }
     }
 
@@ -653,5 +681,48 @@ mod tests {
             (weaker + 2.0 * to_db(1.0 - METAL_DIFFUSE)).abs() < 1e-9,
             "{weaker}"
         );
+    }
+
+    /// The first `n` echoes above a threshold, by range (ties in the order found): what a
+    /// caller that sets [`EchoModel::wanted`] keeps.
+    fn kept(echoes: &[Echo], n: usize, threshold: f64) -> Vec<Echo> {
+        let mut k: Vec<Echo> = echoes
+            .iter()
+            .copied()
+            .filter(|e| e.power_db >= threshold)
+            .collect();
+        k.sort_by(|a, b| a.range.total_cmp(&b.range));
+        k.truncate(n);
+        k
+    }
+
+    proptest::proptest! {
+        /// A walk that stops once it has the wanted echoes keeps exactly the echoes (and the
+        /// first incidence, when it met a surface) that the whole walk gives: on random worlds
+        /// of every material, mirrors and foliage included, from inside objects too.
+        #[test]
+        fn a_walk_stopped_at_the_wanted_echoes_keeps_the_whole_walks(
+            w in crate::world::strategies::arb_world(),
+            ray in crate::world::strategies::arb_hard_ray(),
+            n in 1usize..6,
+            threshold in -90.0f64..-10.0,
+        ) {
+            let m = EchoModel {
+                range_law: RangeLaw::R2,
+                dynamic_range_db: 80.0,
+                max_bounces: 2,
+                wanted: None,
+            };
+            let capped = EchoModel { wanted: Some((n, threshold)), ..m };
+            let mut t = EchoTracer::default();
+            let (mut all, mut some) = (Vec::new(), Vec::new());
+            let cos_all = t.echoes(&w, &ray, 0.7, 40.0, &m, &mut all);
+            let cos_some = t.echoes(&w, &ray, 0.7, 40.0, &capped, &mut some);
+            proptest::prop_assert!(some.len() <= all.len());
+            proptest::prop_assert_eq!(kept(&some, n, threshold), kept(&all, n, threshold));
+            if some.iter().any(|e| e.kind == EchoKind::Surface && e.bounces == 0) {
+                proptest::prop_assert_eq!(cos_some, cos_all);
+            }
+        }
     }
 }

@@ -128,7 +128,7 @@ impl SensorConfig {
         kept: &mut Vec<Echo>,
     ) -> Answer {
         let sig = &self.signal;
-        let model = sig.echo_model();
+        let mut model = sig.echo_model();
         // The tracer's buffers: the echo walk's, and per beam ray where its echoes start in
         // `echoes` and its first incidence cosine.
         let Tracer {
@@ -155,6 +155,16 @@ impl SensorConfig {
             }),
             _ => None,
         };
+        // With the answering ray fixed, `first` and `all` want only its nearest echoes that
+        // count, and its walk may stop once it has them.
+        if fixed.is_some() {
+            let threshold = sig.detection_threshold_db;
+            model.wanted = match sig.return_mode {
+                ReturnMode::First => Some((1, threshold)),
+                ReturnMode::All => Some((sig.max_echoes, threshold)),
+                _ => None,
+            };
+        }
         for (r, (b, &el)) in beam.iter().zip(el_sin_cos).enumerate() {
             let start = echoes.len();
             if fixed.is_some_and(|c| c != r) {
