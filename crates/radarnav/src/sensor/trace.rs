@@ -642,6 +642,46 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// Generated trees and bushes (closed meshes of wood and foliage, each a union of
+        /// overlapping leaf clusters): the mesh searches that stop once the answer is settled
+        /// end every ray where the walk over every mesh's whole-line intervals does. Every
+        /// band (the laser through the first-solid query, foliage being solid to it), along
+        /// the grid and through a fan, from inside crowns and under them, level or rising.
+        #[test]
+        fn plant_forest_trace_equals_walk_over_exhaustive_intervals(
+            count in 1usize..8,
+            seed in 0u64..1000,
+            rays in proptest::collection::vec(
+                ((-5.0..5.0f64, -5.0..5.0f64, 0.0..4.0f64), -3.2..3.2f64, 0.0..0.5f64), 1..12),
+            budget in prop_oneof![Just(0.0), 0.0..12.0f64, Just(f64::INFINITY)],
+            t_max in 0.5..20.0f64,
+        ) {
+            let spec = crate::world::forest::ForestSpec {
+                count, side: 10.0, radius: (0.3, 1.0), clearing: 0.0, seed,
+            };
+            let w = crate::world::forest::plant_forest_of(&spec);
+            proptest::prop_assert!(w.is_binary(Band::Laser));
+            let (mut tr, mut q, mut active) = (Tracer::default(), RayQuery::default(), Vec::new());
+            let mut fan = crate::world::Fan::default();
+            for ((x, y, z), heading, el) in rays {
+                let (s, c) = heading.sin_cos();
+                let ray = Ray::new(DVec3::new(x, y, z), DVec3::new(el.cos() * c, el.cos() * s, el.sin()));
+                proptest::prop_assert!(w.fan(ray.origin, t_max, 360, usize::MAX, &mut fan));
+                for band in [Band::Radar, Band::Laser, Band::Surface] {
+                    let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
+                    let whole =
+                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
+                    let gridded = tr.trace(&w, &ray, band, budget, t_max);
+                    proptest::prop_assert_eq!(gridded, whole, "{:?} {:?}", ray, band);
+                    let fanned = tr.trace_in_fan(&w, &fan, heading, &ray, band, budget, t_max);
+                    proptest::prop_assert_eq!(fanned, whole, "{:?} {:?} fan", ray, band);
+                }
+            }
+        }
+    }
+
     /// A dense thicket of foliage spheres and posts, many to a grid cell, walked by rays that
     /// often end inside foliage: the walk must look for the next entry exactly as far as the
     /// budget reaches.

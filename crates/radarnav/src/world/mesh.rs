@@ -66,18 +66,86 @@ pub struct MeshPart {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// A node of the hierarchy: an inner node's first child follows it, its second child is at
-/// `start`; a leaf holds `order[start..start + count]`.
-#[derive(Clone, Debug, PartialEq)]
-struct Node {
-    /// Bounds in single precision, rounded outward: a node holds every point of its
-    /// triangles, so a query visits all it visited in double precision (and at most a few
-    /// more), and two nodes share a cache line.
-    lo: [f32; 3],
-    hi: [f32; 3],
-    start: u32,
-    /// 0 for an inner node.
+/// How much of a ray's intervals a caller of [`TriMesh::intervals_until`] needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Need {
+    /// Every interval overlapping `(0, t_max)`, each with its exact ends: what a penetration
+    /// walk spends its budget over.
+    Overlapping,
+    /// Only the entry of the first interval overlapping `(0, t_max)`: what a first-hit query
+    /// keeps. The interval's second end is then a point inside it, not its exit.
+    FirstEntry,
+}
+
+/// Whether the crossings found so far settle what a caller needs.
+enum Settled {
+    /// Not yet: a crossing still to be found may change it, or a frontier at `recheck`.
+    No {
+        /// The nearest frontier at which the crossings found so far may settle it.
+        recheck: f64,
+    },
+    /// Yes: the answer has been appended.
+    Yes,
+    /// The crossings of a closed mesh leave it more often than they enter it (a grazed rim):
+    /// the whole line must be classified instead.
+    Unbalanced,
+}
+
+/// A box of the hierarchy and what it holds: triangles `corners_in_order[link..link + count]`
+/// (a leaf), or node `link` (`count` 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Child {
+    /// Bounds `[min x, y, z, max x, y, z]` in single precision, rounded outward: the box holds
+    /// every point of its triangles, so a query visits all it visited in double precision
+    /// (and at most a few more).
+    bounds: [f32; 6],
+    link: u32,
     count: u32,
+}
+
+impl Child {
+    fn lo(&self) -> DVec3 {
+        DVec3::new(
+            self.bounds[0].into(),
+            self.bounds[1].into(),
+            self.bounds[2].into(),
+        )
+    }
+
+    fn hi(&self) -> DVec3 {
+        DVec3::new(
+            self.bounds[3].into(),
+            self.bounds[4].into(),
+            self.bounds[5].into(),
+        )
+    }
+}
+
+/// Children of an inner node, at most.
+const WIDTH: usize = 4;
+
+/// A box still to search: where the ray's line enters it (less a rounding slack), and its
+/// [`Child::link`] and [`Child::count`].
+type Queued = (f64, u32, u32);
+
+/// An inner node of the hierarchy: the boxes of its (up to four) children side by side in two
+/// cache lines, so that a search tests all of them with one memory access and descends half as
+/// many levels as in a binary tree (searches of large scenes wait on memory, not on
+/// arithmetic). Unused children come last, with `link` [`Node::NONE`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(align(64))]
+struct Node {
+    children: [Child; WIDTH],
+}
+
+impl Node {
+    /// The `link` of an unused child.
+    const NONE: u32 = u32::MAX;
+
+    /// The children in use.
+    fn children(&self) -> impl Iterator<Item = &Child> {
+        self.children.iter().take_while(|c| c.link != Self::NONE)
+    }
 }
 
 /// A triangle mesh in world coordinates, with its hierarchy.
@@ -91,6 +159,8 @@ pub struct TriMesh {
     boundary_edges: usize,
     /// Exact bounds `(min, max)` of the vertices.
     bounds: (DVec3, DVec3),
+    /// The whole mesh's box (a leaf when it has few triangles).
+    root: Child,
     nodes: Vec<Node>,
     order: Vec<u32>,
     /// The corners of triangle `order[k]` at `k`: a leaf's triangles side by side.
@@ -178,6 +248,23 @@ impl Sheared {
     }
 }
 
+/// Crossings in line order, an entry before an exit at the same point (so that touching
+/// shells make one interval and a grazed vertex an empty one).
+fn crossing_order(a: &Crossing, b: &Crossing) -> std::cmp::Ordering {
+    a.t.total_cmp(&b.t).then(b.entering.cmp(&a.entering))
+}
+
+/// Whether an interval of a mesh whose vertices lie in `bounds` (`(min, max)`) can overlap
+/// `(0, t_max)` on `ray`: the ray's stretch from just behind its origin to just past `t_max`
+/// meets the bounds (grown by a sheet and far more than rounding), where every crossing lies;
+/// `inv` is the reciprocal of the ray's direction. A cheap test before the crossings: the
+/// cells along a ray list many meshes it passes by.
+pub fn bounds_may_meet((lo, hi): (DVec3, DVec3), ray: &Ray, inv: DVec3, t_max: f64) -> bool {
+    let pad = 2.0 * SURFACE_THICKNESS + 1e-9 * (lo.abs().max(hi.abs()).max_element() + t_max);
+    let (lo, hi) = (lo - pad, hi + pad);
+    stretch_meets_box(ray, inv, lo, hi, (-pad, t_max + pad))
+}
+
 /// The largest `f32` at or below `x`.
 fn f32_down(x: f64) -> f32 {
     let f = x as f32;
@@ -197,13 +284,29 @@ fn line_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
 
 /// Whether the stretch `t0..=t1` of the line of `ray` (`inv`: its direction's reciprocal)
 /// meets the box `lo..hi`.
-fn stretch_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3, (t0, t1): (f64, f64)) -> bool {
+fn stretch_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3, stretch: (f64, f64)) -> bool {
+    stretch_in_box(ray, inv, lo, hi, stretch).is_some()
+}
+
+/// Where the line of `ray` (any t) enters the box `lo..hi`, if it meets it.
+fn line_entry(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3) -> Option<f64> {
+    stretch_in_box(ray, inv, lo, hi, (f64::NEG_INFINITY, f64::INFINITY)).map(|(t0, _)| t0)
+}
+
+/// The part of the stretch `t0..=t1` of the line of `ray` inside the box `lo..hi`, if any.
+fn stretch_in_box(
+    ray: &Ray,
+    inv: DVec3,
+    lo: DVec3,
+    hi: DVec3,
+    (t0, t1): (f64, f64),
+) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (t0, t1);
     for i in 0..3 {
         let (o, d) = (ray.origin[i], ray.dir[i]);
         if d == 0.0 {
             if o < lo[i] || o > hi[i] {
-                return false;
+                return None;
             }
         } else {
             let (a, b) = ((lo[i] - o) * inv[i], (hi[i] - o) * inv[i]);
@@ -211,7 +314,7 @@ fn stretch_meets_box(ray: &Ray, inv: DVec3, lo: DVec3, hi: DVec3, (t0, t1): (f64
             t1 = t1.min(a.max(b));
         }
     }
-    t0 <= t1
+    (t0 <= t1).then_some((t0, t1))
 }
 
 impl TriMesh {
@@ -263,6 +366,7 @@ impl TriMesh {
             closed,
             boundary_edges,
             bounds: (DVec3::ZERO, DVec3::ZERO),
+            root: Child::default(),
             nodes: Vec::new(),
             order: Vec::new(),
             corners_in_order: Vec::new(),
@@ -343,34 +447,68 @@ impl TriMesh {
         self.order = (0..self.triangles.len() as u32).collect();
         self.nodes.clear();
         let n = self.order.len();
-        self.split(&boxes, 0, n);
+        self.root = self.split(&boxes, 0, n);
         self.corners_in_order = (self.order.iter())
             .map(|&k| self.corners(k as usize))
             .collect();
     }
 
-    /// Builds the node for `order[start..end]` and its children (median split on the longest
-    /// axis of the centres); returns its index.
-    fn split(&mut self, boxes: &[(DVec3, DVec3, DVec3)], start: usize, end: usize) -> usize {
+    /// The box of `order[start..end]`, and below it its nodes: two levels of median splits on
+    /// the longest axis of the centres give a node's children.
+    fn split(&mut self, boxes: &[(DVec3, DVec3, DVec3)], start: usize, end: usize) -> Child {
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for &k in &self.order[start..end] {
-            let (a, b, c) = boxes[k as usize];
+            let (a, b, _) = boxes[k as usize];
             (lo, hi) = (lo.min(a), hi.max(b));
-            (clo, chi) = (clo.min(c), chi.max(c));
         }
-        if self.nodes.is_empty() {
+        if start == 0 && end == self.order.len() {
             self.bounds = (lo, hi);
         }
-        let me = self.nodes.len();
-        self.nodes.push(Node {
-            lo: lo.to_array().map(f32_down),
-            hi: hi.to_array().map(f32_up),
-            start: start as u32,
-            count: (end - start) as u32,
-        });
+        let [lx, ly, lz] = lo.to_array().map(f32_down);
+        let [hx, hy, hz] = hi.to_array().map(f32_up);
+        let bounds = [lx, ly, lz, hx, hy, hz];
         if end - start <= LEAF_SIZE {
-            return me;
+            return Child {
+                bounds,
+                link: start as u32,
+                count: (end - start) as u32,
+            };
+        }
+        let mid = self.halve(boxes, start, end);
+        let mut ranges = Vec::with_capacity(WIDTH);
+        for (a, b) in [(start, mid), (mid, end)] {
+            if b - a > LEAF_SIZE {
+                let m = self.halve(boxes, a, b);
+                ranges.extend([(a, m), (m, b)]);
+            } else {
+                ranges.push((a, b));
+            }
+        }
+        let me = self.nodes.len();
+        let none = Child {
+            link: Node::NONE,
+            ..Child::default()
+        };
+        self.nodes.push(Node {
+            children: [none; WIDTH],
+        });
+        for (i, (a, b)) in ranges.into_iter().enumerate() {
+            self.nodes[me].children[i] = self.split(boxes, a, b);
+        }
+        Child {
+            bounds,
+            link: me as u32,
+            count: 0,
+        }
+    }
+
+    /// Orders `order[start..end]` about its median along the longest axis of the triangles'
+    /// centres; returns where the second half begins.
+    fn halve(&mut self, boxes: &[(DVec3, DVec3, DVec3)], start: usize, end: usize) -> usize {
+        let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &k in &self.order[start..end] {
+            let c = boxes[k as usize].2;
+            (clo, chi) = (clo.min(c), chi.max(c));
         }
         let ext = chi - clo;
         let axis = if ext.x >= ext.y && ext.x >= ext.z {
@@ -384,36 +522,32 @@ impl TriMesh {
         self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
             boxes[a as usize].2[axis].total_cmp(&boxes[b as usize].2[axis])
         });
-        self.split(boxes, start, mid);
-        let right = self.split(boxes, mid, end);
-        self.nodes[me].count = 0;
-        self.nodes[me].start = right as u32;
-        me
+        mid
     }
 
-    /// Calls `f` with the place in `order` of every triangle whose node boxes pass `keep`.
+    /// Calls `f` with the place in `order` of every triangle whose boxes pass `keep`.
     fn visit(&self, keep: impl Fn(DVec3, DVec3) -> bool, mut f: impl FnMut(usize)) {
-        // Median splits keep the depth near log2(triangles / 4) ≤ 21: a fixed stack, no
-        // allocation per query.
-        let mut stack = [0u32; 64];
-        let mut top = 1;
+        // Median splits keep the depth near log4(triangles / 4) ≤ 11, each level leaving at
+        // most three children behind: a fixed stack, no allocation per query.
+        let mut stack = [(0u32, 0u32); 64];
+        let mut top = 0;
+        if keep(self.root.lo(), self.root.hi()) {
+            stack[0] = (self.root.link, self.root.count);
+            top = 1;
+        }
         while top > 0 {
             top -= 1;
-            let i = stack[top] as usize;
-            let n = &self.nodes[i];
-            if !keep(
-                DVec3::from(n.lo.map(f64::from)),
-                DVec3::from(n.hi.map(f64::from)),
-            ) {
+            let (link, count) = stack[top];
+            if count > 0 {
+                let s = link as usize;
+                (s..s + count as usize).for_each(&mut f);
                 continue;
             }
-            if n.count == 0 {
-                stack[top] = n.start;
-                stack[top + 1] = (i + 1) as u32;
-                top += 2;
-            } else {
-                let s = n.start as usize;
-                (s..s + n.count as usize).for_each(&mut f);
+            for child in self.nodes[link as usize].children() {
+                if keep(child.lo(), child.hi()) {
+                    stack[top] = (child.link, child.count);
+                    top += 1;
+                }
             }
         }
     }
@@ -431,15 +565,10 @@ impl TriMesh {
         );
     }
 
-    /// Whether an interval of [`TriMesh::ray_intervals`] can overlap `(0, t_max)`: the ray's
-    /// stretch from just behind its origin to just past `t_max` meets the mesh's bounds
-    /// (grown by a sheet and far more than rounding), where every crossing lies. A cheap test
-    /// before the crossings: the cells along a ray list many meshes it passes by.
+    /// Whether an interval of [`TriMesh::ray_intervals`] can overlap `(0, t_max)`
+    /// ([`bounds_may_meet`] with the mesh's bounds).
     pub fn may_meet(&self, ray: &Ray, t_max: f64) -> bool {
-        let (lo, hi) = self.bounds;
-        let pad = 2.0 * SURFACE_THICKNESS + 1e-9 * (lo.abs().max(hi.abs()).max_element() + t_max);
-        let (lo, hi) = (lo - pad, hi + pad);
-        stretch_meets_box(ray, ray.dir.recip(), lo, hi, (-pad, t_max + pad))
+        bounds_may_meet(self.bounds, ray, ray.dir.recip(), t_max)
     }
 
     /// Appends to `out` the disjoint intervals, in increasing order, where the ray's whole
@@ -458,12 +587,216 @@ impl TriMesh {
         });
     }
 
+    /// Appends to `out` what `need` asks of the intervals of [`TriMesh::ray_intervals`] that
+    /// overlap `(0, t_max)`, finding only the crossings that decide it: the hierarchy is
+    /// searched front to back along the ray's line, and the search stops once every crossing
+    /// not yet found lies beyond the point that settles the answer (a laser's first entry is
+    /// settled by the next crossing after it; a walk's intervals by the exit of the last one
+    /// to begin before `t_max`). A line whose crossings up to there do not balance (a grazed
+    /// rim) is classified whole, as [`TriMesh::ray_intervals`] does.
+    pub fn intervals_until(&self, ray: &Ray, t_max: f64, need: Need, out: &mut Vec<(f64, f64)>) {
+        thread_local! {
+            /// The crossings found, sorted, and the boxes still to search, farthest first.
+            static SEARCH: std::cell::RefCell<(Vec<Crossing>, Vec<Queued>)> =
+                const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+        }
+        let inv = ray.dir.recip();
+        let (lo, hi) = self.bounds;
+        let Some((_, t_leave)) =
+            stretch_in_box(ray, inv, lo, hi, (f64::NEG_INFINITY, f64::INFINITY))
+        else {
+            return;
+        };
+        SEARCH.with_borrow_mut(|(hits, queue)| {
+            hits.clear();
+            if need == Need::Overlapping && t_leave <= t_max {
+                // Every crossing lies before `t_max`: all of them are needed (but those behind
+                // the origin, rarely many), so the plain search is the cheaper.
+                self.crossings(ray, hits);
+                self.keep_overlapping(ray, hits, t_max, need, out);
+                return;
+            }
+            queue.clear();
+            let sheared = Sheared::of(ray);
+            // A crossing's computed distance may fall short of its node's computed entry by
+            // rounding: nodes count as reaching this much nearer (far more than rounding).
+            let slack = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element())
+                + 1e-9 * ray.origin.abs().max_element();
+            let enter = |c: &Child, queue: &mut Vec<Queued>| {
+                if let Some(t) = line_entry(ray, inv, c.lo(), c.hi()) {
+                    let t = t - slack;
+                    let at = queue.partition_point(|&(u, _, _)| u > t);
+                    queue.insert(at, (t, c.link, c.count));
+                }
+            };
+            enter(&self.root, queue);
+            // The search settles nothing new before the frontier reaches `recheck` or a
+            // crossing is found.
+            let mut recheck = f64::NEG_INFINITY;
+            loop {
+                // Every crossing not found yet lies at or beyond the nearest node left.
+                let frontier = queue.last().map_or(f64::INFINITY, |&(t, _, _)| t);
+                if frontier >= recheck {
+                    match self.settle(ray, hits, frontier, t_max, need, out) {
+                        Settled::Yes => return,
+                        Settled::Unbalanced => break,
+                        Settled::No { recheck: r } => recheck = r,
+                    }
+                }
+                // Settled once nothing is left (unless `t_max` is not a number).
+                let Some((_, link, count)) = queue.pop() else {
+                    break;
+                };
+                if count == 0 {
+                    for child in self.nodes[link as usize].children() {
+                        enter(child, queue);
+                    }
+                } else {
+                    let s = link as usize;
+                    for corners in &self.corners_in_order[s..s + count as usize] {
+                        let [a, b, c] = *corners;
+                        if let Some(h) = sheared.cross(a, b, c) {
+                            let at = hits.partition_point(|x| crossing_order(x, &h).is_lt());
+                            hits.insert(at, h);
+                            recheck = f64::NEG_INFINITY;
+                        }
+                    }
+                }
+            }
+            hits.clear();
+            self.crossings(ray, hits);
+            self.keep_overlapping(ray, hits, t_max, need, out);
+        })
+    }
+
+    /// Whether the sorted crossings `hits`, complete below `frontier`, settle what `need` asks
+    /// of the intervals overlapping `(0, t_max)`; if so, appends it to `out`. If not, says
+    /// from which frontier on (with no crossing found meanwhile) it could be.
+    #[allow(clippy::too_many_arguments)]
+    fn settle(
+        &self,
+        ray: &Ray,
+        hits: &mut [Crossing],
+        frontier: f64,
+        t_max: f64,
+        need: Need,
+        out: &mut Vec<(f64, f64)>,
+    ) -> Settled {
+        let known = hits.partition_point(|h| h.t < frontier);
+        // The prefix of known crossings grows once the frontier passes the next one.
+        let next_hit = hits.get(known).map_or(f64::INFINITY, |h| h.t);
+        let done = frontier == f64::INFINITY;
+        if !self.closed {
+            // Sheets merge while crossings lie within one thickness of the last.
+            let mut chain: Option<(f64, f64)> = None;
+            for h in &hits[..known] {
+                chain = match chain {
+                    Some((s, e)) if h.t <= e => Some((s, h.t + SURFACE_THICKNESS)),
+                    _ => Some((h.t, h.t + SURFACE_THICKNESS)),
+                };
+                if need == Need::FirstEntry
+                    && let Some((s, e)) = chain
+                    && e > 0.0
+                {
+                    if s < t_max {
+                        out.push((s, e));
+                    }
+                    return Settled::Yes;
+                }
+            }
+            let chain_end = chain.map_or(f64::NEG_INFINITY, |(_, e)| e);
+            return match need {
+                Need::FirstEntry if frontier >= t_max => Settled::Yes,
+                Need::Overlapping if frontier >= t_max && frontier > chain_end => {
+                    self.keep_overlapping(ray, &mut hits[..known], t_max, need, out);
+                    Settled::Yes
+                }
+                Need::FirstEntry => Settled::No {
+                    recheck: next_hit.min(t_max),
+                },
+                Need::Overlapping => Settled::No {
+                    recheck: next_hit.min(t_max.max(chain_end)),
+                },
+            };
+        }
+        let mut depth = 0u32;
+        let mut entry = f64::NAN;
+        for h in &hits[..known] {
+            // An interval open at `entry` and still open past both it and the ray's origin is
+            // not empty and overlaps the ray: the first one is the first entry asked for.
+            if need == Need::FirstEntry && depth > 0 && h.t > entry && h.t > 0.0 {
+                if entry < t_max {
+                    out.push((entry, h.t));
+                }
+                return Settled::Yes;
+            }
+            if h.entering {
+                if depth == 0 {
+                    entry = h.t;
+                }
+                depth += 1;
+            } else if depth == 0 {
+                return Settled::Unbalanced;
+            } else {
+                depth -= 1;
+            }
+        }
+        if done && depth > 0 {
+            return Settled::Unbalanced;
+        }
+        match need {
+            // Every crossing to come lies past both the open interval's entry and the origin.
+            Need::FirstEntry if depth > 0 && frontier > entry && frontier > 0.0 => {
+                if entry < t_max {
+                    out.push((entry, frontier));
+                }
+                Settled::Yes
+            }
+            Need::FirstEntry | Need::Overlapping if depth == 0 && frontier >= t_max => {
+                if need == Need::Overlapping {
+                    self.keep_overlapping(ray, &mut hits[..known], t_max, need, out);
+                }
+                Settled::Yes
+            }
+            Need::FirstEntry if depth > 0 => Settled::No {
+                recheck: next_hit.min(entry.max(0.0)),
+            },
+            _ if depth == 0 => Settled::No {
+                recheck: next_hit.min(t_max),
+            },
+            _ => Settled::No { recheck: next_hit },
+        }
+    }
+
+    /// Appends what `need` asks of the intervals of the crossings `hits` (all of them up to
+    /// some point past `t_max`) that overlap `(0, t_max)`.
+    fn keep_overlapping(
+        &self,
+        ray: &Ray,
+        hits: &mut [Crossing],
+        t_max: f64,
+        need: Need,
+        out: &mut Vec<(f64, f64)>,
+    ) {
+        let start = out.len();
+        self.intervals_of(ray, hits, out);
+        let mut kept = start;
+        for k in start..out.len() {
+            let (a, b) = out[k];
+            if b > 0.0 && a < t_max && (need == Need::Overlapping || kept == start) {
+                out[kept] = (a, b);
+                kept += 1;
+            }
+        }
+        out.truncate(kept);
+    }
+
     /// The intervals of `hits` (crossings of `ray`'s line), appended to `out`.
     fn intervals_of(&self, ray: &Ray, hits: &mut [Crossing], out: &mut Vec<(f64, f64)>) {
         if hits.is_empty() {
             return;
         }
-        hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(b.entering.cmp(&a.entering)));
+        hits.sort_by(crossing_order);
         let start = out.len();
         if !self.closed {
             for h in hits.iter() {
@@ -1057,15 +1390,70 @@ pub(crate) mod tests {
                     "{:?} turned away, intervals {:?}", ray, iv
                 );
             }
-            for (i, n) in m.nodes.iter().enumerate() {
-                if n.count > 0 {
-                    for k in n.start..n.start + n.count {
-                        for v in m.corners_in_order[k as usize] {
-                            let (lo, hi) = (DVec3::from(n.lo.map(f64::from)), DVec3::from(n.hi.map(f64::from)));
-                            prop_assert!(v.cmpge(lo).all() && v.cmple(hi).all(), "node {}", i);
-                        }
+            let leaves = m.nodes.iter().flat_map(|n| n.children().copied()).chain([m.root]);
+            for (i, c) in leaves.filter(|c| c.count > 0).enumerate() {
+                for k in c.link..c.link + c.count {
+                    for v in m.corners_in_order[k as usize] {
+                        prop_assert!(v.cmpge(c.lo()).all() && v.cmple(c.hi()).all(), "leaf {}", i);
                     }
                 }
+            }
+        }
+
+        /// The search that stops once the answer is settled gives what the whole line's
+        /// intervals give: every interval overlapping `(0, t_max)` with its exact ends, or the
+        /// first one's entry. Closed unions of overlapping shells (a grown bush, cubes and a
+        /// sphere), an open sheet; rays from inside and outside, through vertices and along
+        /// faces' planes; `t_max` from below zero to infinity.
+        #[test]
+        fn a_search_stopped_when_settled_gives_the_whole_lines_intervals(
+            kind in 0usize..3,
+            seed in 0u64..50,
+            o in prop::array::uniform3(-1.0..4.0f64),
+            d in prop::array::uniform3(-1.0..1.0f64),
+            snap in 0usize..3,
+            t_max in prop_oneof![-0.5..0.5f64, 0.0..6.0f64, Just(f64::INFINITY)],
+        ) {
+            let m = match kind {
+                0 => two_cubes(),
+                1 => {
+                    let part = super::super::procedural::grow(
+                        super::super::procedural::Plant::Bush, 2.5, seed);
+                    let v = part[0].vertices.iter().map(|v| *v + DVec3::new(1.5, 1.5, 0.0)).collect();
+                    TriMesh::new(v, part[0].triangles.clone()).expect("a bush")
+                }
+                _ => {
+                    let v = vec![
+                        DVec3::new(0.5, 0.5, 0.5), DVec3::new(2.5, 0.5, 0.7),
+                        DVec3::new(1.0, 2.5, 1.9), DVec3::new(2.0, 2.0, 0.2),
+                    ];
+                    TriMesh::new(v, vec![[0, 1, 2], [1, 3, 2]]).expect("a sheet")
+                }
+            };
+            prop_assume!(DVec3::from(d).length() > 0.1);
+            let mut origin = DVec3::from(o);
+            if snap == 1 {
+                origin = origin.round();
+            }
+            let mut dir = DVec3::from(d);
+            if snap == 2 {
+                dir = DVec3::X * dir.x.signum();
+            }
+            let ray = Ray::new(origin, dir);
+            let whole: Vec<(f64, f64)> = intervals(&m, &ray)
+                .into_iter()
+                .filter(|&(a, b)| b > 0.0 && a < t_max)
+                .collect();
+            let mut all = Vec::new();
+            m.intervals_until(&ray, t_max, Need::Overlapping, &mut all);
+            prop_assert_eq!(&all, &whole, "{:?} t_max {}", ray, t_max);
+            let mut first = Vec::new();
+            m.intervals_until(&ray, t_max, Need::FirstEntry, &mut first);
+            prop_assert_eq!(first.len(), whole.len().min(1), "{:?} t_max {}", ray, t_max);
+            if let (Some(f), Some(w)) = (first.first(), whole.first()) {
+                prop_assert_eq!(f.0, w.0, "{:?} t_max {}", ray, t_max);
+                // The second end is a point inside the interval.
+                prop_assert!(f.1 > f.0.max(0.0) && f.1 <= w.1, "{:?} in {:?}", f, w);
             }
         }
 

@@ -23,6 +23,7 @@ use std::cmp::Ordering;
 use glam::{DVec2, DVec3};
 
 use grid::{CellWalk, Grid};
+use mesh::Need;
 
 /// A solid in the world.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,11 +92,14 @@ pub struct RayQuery {
     /// listed in several cells is tested once per ray ("mailboxing").
     stamps: Vec<u32>,
     stamp: u32,
+    /// The reciprocal of the current ray's direction, for box tests.
+    inv: DVec3,
 }
 
 impl RayQuery {
     /// Starts a new ray over a world of `slots` objects and parts.
-    fn next_ray(&mut self, slots: usize) {
+    fn next_ray(&mut self, slots: usize, ray: &Ray) {
+        self.inv = ray.dir.recip();
         if self.stamps.len() < slots {
             self.stamps.resize(slots, 0);
         }
@@ -291,6 +295,9 @@ pub struct World {
     objects: Vec<Object>,
     /// Per object, axis-aligned bounds `(min, max)`.
     aabbs: Vec<(DVec3, DVec3)>,
+    /// Per object, whether it is a mesh: a ray is tested against its bounds (here, side by
+    /// side) before the mesh is looked at.
+    is_mesh: Vec<bool>,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
     parts: Vec<Part>,
@@ -319,6 +326,9 @@ impl World {
     /// A world of `objects` whose material ids refer to `materials`.
     pub fn new(materials: MaterialTable, objects: Vec<Object>) -> Self {
         let aabbs: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.shape.aabb()).collect();
+        let is_mesh = (objects.iter())
+            .map(|o| matches!(o.shape, Shape::Mesh(_)))
+            .collect();
         let solid = objects
             .iter()
             .map(|o| {
@@ -386,6 +396,7 @@ impl World {
             materials,
             objects,
             aabbs,
+            is_mesh,
             solid,
             parts,
             part_rects,
@@ -453,7 +464,7 @@ impl World {
         stop_band: Option<Band>,
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
-        q.next_ray(self.objects.len() + self.parts.len());
+        q.next_ray(self.objects.len() + self.parts.len(), ray);
         OrderedIntervals {
             world: self,
             ray: *ray,
@@ -478,7 +489,7 @@ impl World {
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
         debug_assert_eq!(ray.origin, fan.origin());
-        q.next_ray(self.objects.len() + self.parts.len());
+        q.next_ray(self.objects.len() + self.parts.len(), ray);
         OrderedIntervals {
             world: self,
             ray: *ray,
@@ -499,9 +510,10 @@ impl World {
         q: &'q mut RayQuery,
     ) -> &'q [Interval] {
         q.intervals.clear();
+        let inv = ray.dir.recip();
         for i in 0..self.objects.len() {
             let (spans, out) = (&mut q.spans, &mut q.intervals);
-            self.object_intervals(i as u32, ray, t_max, spans, |iv| out.push(iv));
+            self.object_intervals(i as u32, ray, inv, t_max, None, spans, |iv| out.push(iv));
         }
         q.intervals.sort_by(entry_order);
         &q.intervals
@@ -518,7 +530,9 @@ impl World {
         self.test_part_with(
             part,
             ray,
+            q.inv,
             t_max,
+            Need::Overlapping,
             by_parts,
             &mut q.stamps,
             q.stamp,
@@ -534,7 +548,9 @@ impl World {
         &self,
         part: u32,
         ray: &Ray,
+        inv: DVec3,
         t_max: f64,
+        need: Need,
         by_parts: u8,
         stamps: &mut [u32],
         stamp: u32,
@@ -589,7 +605,7 @@ impl World {
                     if t_in <= 0.0 && t_out > 0.0 && stamps[object as usize] != stamp =>
                 {
                     stamps[object as usize] = stamp;
-                    self.object_intervals(object, ray, t_max, spans, take);
+                    self.object_intervals(object, ray, inv, t_max, Some(need), spans, take);
                 }
                 // Its merged intervals are filed already.
                 Some((t_in, t_out)) if t_in <= 0.0 && t_out > 0.0 => {}
@@ -605,7 +621,7 @@ impl World {
                 _ => {}
             }
         } else {
-            self.object_intervals(object, ray, t_max, spans, take);
+            self.object_intervals(object, ray, inv, t_max, Some(need), spans, take);
         }
     }
 
@@ -629,22 +645,35 @@ impl World {
         band: Band,
         q: &mut RayQuery,
     ) -> Option<Interval> {
-        q.next_ray(self.objects.len() + self.parts.len());
+        q.next_ray(self.objects.len() + self.parts.len(), ray);
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
-        let (stamps, stamp, spans) = (&mut q.stamps, q.stamp, &mut q.spans);
+        let (stamps, stamp, spans, inv) = (&mut q.stamps, q.stamp, &mut q.spans, q.inv);
         // Tests a part (objects not solid to the band are skipped) and keeps in `best`
         // whichever interval comes first in entry order.
         let mut test = |part: u32, best: &mut Option<Interval>| {
             if self.solid[self.parts[part as usize].object as usize] & bit == 0 {
                 return;
             }
+            // Past the best entry so far nothing can come first: a mesh stops looking there.
+            let t_max = best.map_or(t_max, |b| t_max.min(b.t_in.next_up()));
             let keep = |iv: Interval| {
                 if best.is_none_or(|b| entry_order(&iv, &b) == Ordering::Less) {
                     *best = Some(iv);
                 }
             };
-            self.test_part_with(part, ray, t_max, bit, stamps, stamp, spans, keep);
+            self.test_part_with(
+                part,
+                ray,
+                inv,
+                t_max,
+                Need::FirstEntry,
+                bit,
+                stamps,
+                stamp,
+                spans,
+                keep,
+            );
         };
         match fan {
             Some((fan, heading)) => {
@@ -678,24 +707,32 @@ impl World {
         best
     }
 
-    /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`.
+    /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`:
+    /// for a mesh, what `need` asks of them (`None`: every one, from its whole line's
+    /// crossings, as the exhaustive reference does).
+    #[allow(clippy::too_many_arguments)]
     fn object_intervals(
         &self,
         index: u32,
         ray: &Ray,
+        inv: DVec3,
         t_max: f64,
+        need: Option<Need>,
         spans: &mut Vec<(f64, f64)>,
         mut take: impl FnMut(Interval),
     ) {
-        let obj = &self.objects[index as usize];
         // The cells along a ray list many meshes it passes by: their bounds first.
-        if let Shape::Mesh(m) = &obj.shape
-            && !m.may_meet(ray, t_max)
+        if self.is_mesh[index as usize]
+            && !mesh::bounds_may_meet(self.aabbs[index as usize], ray, inv, t_max)
         {
             return;
         }
+        let obj = &self.objects[index as usize];
         spans.clear();
-        obj.shape.ray_intervals(ray, spans);
+        match (&obj.shape, need) {
+            (Shape::Mesh(m), Some(need)) => m.intervals_until(ray, t_max, need, spans),
+            (shape, _) => shape.ray_intervals(ray, spans),
+        }
         for &(t_in, t_out) in spans.iter() {
             if t_out > 0.0 && t_in < t_max {
                 take(Interval {
