@@ -12,7 +12,10 @@
 //! computed from the same sheared vertices, so its two values are exact negatives; a ray
 //! through the edge itself (value 0) is given to exactly one of the two by a top-left rule.
 //! A ray through a closed mesh therefore crosses it an even number of times, whatever edges
-//! or vertices it meets. The triangles sit in a bounding-volume hierarchy of their own.
+//! or vertices it meets. The triangles sit in a bounding-volume hierarchy of their own, four
+//! children to a node. A sensor's query searches it front to back along the ray's line and
+//! stops once the crossings found settle what the query needs ([`TriMesh::intervals_until`]):
+//! the answer is the one the whole line's crossings give, found without most of them.
 
 use std::collections::HashMap;
 
@@ -602,9 +605,18 @@ impl TriMesh {
         }
         let inv = ray.dir.recip();
         let (lo, hi) = self.bounds;
-        let Some((_, t_leave)) =
-            stretch_in_box(ray, inv, lo, hi, (f64::NEG_INFINITY, f64::INFINITY))
-        else {
+        // A crossing's computed distance may fall short of its box's computed entry by
+        // rounding: boxes count as reaching this much nearer (far more than rounding), and the
+        // mesh's bounds this much wider.
+        let slack = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element())
+            + 1e-9 * ray.origin.abs().max_element();
+        let Some((_, t_leave)) = stretch_in_box(
+            ray,
+            inv,
+            lo - slack,
+            hi + slack,
+            (f64::NEG_INFINITY, f64::INFINITY),
+        ) else {
             return;
         };
         SEARCH.with_borrow_mut(|(hits, queue)| {
@@ -618,10 +630,6 @@ impl TriMesh {
             }
             queue.clear();
             let sheared = Sheared::of(ray);
-            // A crossing's computed distance may fall short of its node's computed entry by
-            // rounding: nodes count as reaching this much nearer (far more than rounding).
-            let slack = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element())
-                + 1e-9 * ray.origin.abs().max_element();
             let enter = |c: &Child, queue: &mut Vec<Queued>| {
                 if let Some(t) = line_entry(ray, inv, c.lo(), c.hi()) {
                     let t = t - slack;

@@ -636,7 +636,8 @@ impl World {
     /// before `t_max`: the interval a walk of [`World::ordered_intervals`] stops at when every
     /// other object is transparent to `band` ([`World::is_binary`]). Through `fan` (its
     /// origin the ray's, with the ray's bearing) when given, else along the grid. Objects
-    /// transparent to `band` are not tested at all.
+    /// transparent to `band` are not tested at all. A mesh's exit is not looked for: its
+    /// interval's `t_out` is then a point inside it.
     pub fn first_solid(
         &self,
         fan: Option<(&Fan, f64)>,
