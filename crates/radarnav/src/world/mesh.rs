@@ -209,7 +209,8 @@ impl Sheared {
 
     /// A vertex relative to the ray, sheared: (x, y) across the ray, z along it (scaled).
     fn vertex(&self, v: DVec3) -> DVec3 {
-        let p = v - self.origin;
+        // An array, not the vector, is indexed: a vector's index is a match per access.
+        let p = (v - self.origin).to_array();
         let [kx, ky, kz] = self.k;
         DVec3::new(
             p[kx] - self.s.x * p[kz],
@@ -257,15 +258,36 @@ fn crossing_order(a: &Crossing, b: &Crossing) -> std::cmp::Ordering {
     a.t.total_cmp(&b.t).then(b.entering.cmp(&a.entering))
 }
 
-/// Whether an interval of a mesh whose vertices lie in `bounds` (`(min, max)`) can overlap
-/// `(0, t_max)` on `ray`: the ray's stretch from just behind its origin to just past `t_max`
-/// meets the bounds (grown by a sheet and far more than rounding), where every crossing lies;
-/// `inv` is the reciprocal of the ray's direction. A cheap test before the crossings: the
-/// cells along a ray list many meshes it passes by.
-pub fn bounds_may_meet((lo, hi): (DVec3, DVec3), ray: &Ray, inv: DVec3, t_max: f64) -> bool {
-    let pad = 2.0 * SURFACE_THICKNESS + 1e-9 * (lo.abs().max(hi.abs()).max_element() + t_max);
-    let (lo, hi) = (lo - pad, hi + pad);
-    stretch_meets_box(ray, inv, lo, hi, (-pad, t_max + pad))
+/// A mesh's bounds grown for the cheap test a ray passes before the mesh is searched
+/// ([`Reach::may_meet`]): by a sheet and far more than rounding at the mesh's coordinates.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Reach {
+    lo: DVec3,
+    hi: DVec3,
+    pad: f64,
+}
+
+impl Reach {
+    /// The reach of a mesh whose vertices lie in `bounds` (`(min, max)`).
+    pub fn of((lo, hi): (DVec3, DVec3)) -> Self {
+        let pad = 2.0 * SURFACE_THICKNESS + 1e-9 * lo.abs().max(hi.abs()).max_element();
+        Self {
+            lo: lo - pad,
+            hi: hi + pad,
+            pad,
+        }
+    }
+
+    /// Whether an interval of the mesh can overlap `(0, t_max)` on `ray` (`inv`: the
+    /// reciprocal of its direction): the ray's stretch from just behind its origin to just
+    /// past `t_max` meets the grown bounds, where every crossing lies. A cheap test before
+    /// the crossings: the cells along a ray list many meshes it passes by.
+    pub fn may_meet(&self, ray: &Ray, inv: DVec3, t_max: f64) -> bool {
+        // Rounding grows with the distance too.
+        let far = 1e-9 * t_max;
+        let pad = self.pad + far;
+        stretch_meets_box(ray, inv, self.lo - far, self.hi + far, (-pad, t_max + pad))
+    }
 }
 
 /// The largest `f32` at or below `x`.
@@ -305,19 +327,22 @@ fn stretch_in_box(
     (t0, t1): (f64, f64),
 ) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (t0, t1);
-    for i in 0..3 {
-        let (o, d) = (ray.origin[i], ray.dir[i]);
+    // Axis by axis through the fields: indexing a vector by a run-time axis costs a match
+    // per access, and this test runs for every box a ray meets.
+    let mut slab = |o: f64, d: f64, inv: f64, lo: f64, hi: f64| {
         if d == 0.0 {
-            if o < lo[i] || o > hi[i] {
-                return None;
-            }
-        } else {
-            let (a, b) = ((lo[i] - o) * inv[i], (hi[i] - o) * inv[i]);
-            t0 = t0.max(a.min(b));
-            t1 = t1.min(a.max(b));
+            return lo <= o && o <= hi;
         }
-    }
-    (t0 <= t1).then_some((t0, t1))
+        let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+        true
+    };
+    let (o, d) = (ray.origin, ray.dir);
+    let inside = slab(o.x, d.x, inv.x, lo.x, hi.x)
+        && slab(o.y, d.y, inv.y, lo.y, hi.y)
+        && slab(o.z, d.z, inv.z, lo.z, hi.z);
+    (inside && t0 <= t1).then_some((t0, t1))
 }
 
 impl TriMesh {
@@ -569,9 +594,9 @@ impl TriMesh {
     }
 
     /// Whether an interval of [`TriMesh::ray_intervals`] can overlap `(0, t_max)`
-    /// ([`bounds_may_meet`] with the mesh's bounds).
+    /// ([`Reach::may_meet`] of its bounds).
     pub fn may_meet(&self, ray: &Ray, t_max: f64) -> bool {
-        bounds_may_meet(self.bounds, ray, ray.dir.recip(), t_max)
+        Reach::of(self.bounds).may_meet(ray, ray.dir.recip(), t_max)
     }
 
     /// Appends to `out` the disjoint intervals, in increasing order, where the ray's whole

@@ -295,9 +295,9 @@ pub struct World {
     objects: Vec<Object>,
     /// Per object, axis-aligned bounds `(min, max)`.
     aabbs: Vec<(DVec3, DVec3)>,
-    /// Per object, whether it is a mesh: a ray is tested against its bounds (here, side by
-    /// side) before the mesh is looked at.
-    is_mesh: Vec<bool>,
+    /// Per object that is a mesh, its [`mesh::Reach`]: a ray is tested against it (here,
+    /// side by side) before the mesh is looked at.
+    mesh_reach: Vec<Option<mesh::Reach>>,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
     parts: Vec<Part>,
@@ -326,8 +326,8 @@ impl World {
     /// A world of `objects` whose material ids refer to `materials`.
     pub fn new(materials: MaterialTable, objects: Vec<Object>) -> Self {
         let aabbs: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.shape.aabb()).collect();
-        let is_mesh = (objects.iter())
-            .map(|o| matches!(o.shape, Shape::Mesh(_)))
+        let mesh_reach = (objects.iter().zip(&aabbs))
+            .map(|(o, &b)| matches!(o.shape, Shape::Mesh(_)).then(|| mesh::Reach::of(b)))
             .collect();
         let solid = objects
             .iter()
@@ -396,7 +396,7 @@ impl World {
             materials,
             objects,
             aabbs,
-            is_mesh,
+            mesh_reach,
             solid,
             parts,
             part_rects,
@@ -723,8 +723,8 @@ impl World {
         mut take: impl FnMut(Interval),
     ) {
         // The cells along a ray list many meshes it passes by: their bounds first.
-        if self.is_mesh[index as usize]
-            && !mesh::bounds_may_meet(self.aabbs[index as usize], ray, inv, t_max)
+        if let Some(reach) = &self.mesh_reach[index as usize]
+            && !reach.may_meet(ray, inv, t_max)
         {
             return;
         }
