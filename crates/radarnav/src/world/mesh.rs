@@ -127,6 +127,19 @@ impl Child {
 /// Children of an inner node, at most.
 const WIDTH: usize = 4;
 
+/// Bins of the surface area heuristic's cuts, per axis.
+const SAH_BINS: usize = 16;
+
+/// Levels of nodes below which the surface area heuristic cuts; deeper, median splits keep
+/// the depth in bounds whatever the triangles (the heuristic may cut one off at a time).
+const SAH_DEPTH: usize = 12;
+
+/// The bin of the heuristic's `SAH_BINS` that a centre at `c` falls in, over centres from
+/// `lo` spanning `ext`.
+fn sah_bin(c: f64, lo: f64, ext: f64) -> usize {
+    (((c - lo) / ext * SAH_BINS as f64) as usize).min(SAH_BINS - 1)
+}
+
 /// A box still to search: where the ray's line enters it (less a rounding slack), and its
 /// [`Child::link`] and [`Child::count`].
 type Queued = (f64, u32, u32);
@@ -475,15 +488,21 @@ impl TriMesh {
         self.order = (0..self.triangles.len() as u32).collect();
         self.nodes.clear();
         let n = self.order.len();
-        self.root = self.split(&boxes, 0, n);
+        self.root = self.split(&boxes, 0, n, 0);
         self.corners_in_order = (self.order.iter())
             .map(|&k| self.corners(k as usize))
             .collect();
     }
 
-    /// The box of `order[start..end]`, and below it its nodes: two levels of median splits on
-    /// the longest axis of the centres give a node's children.
-    fn split(&mut self, boxes: &[(DVec3, DVec3, DVec3)], start: usize, end: usize) -> Child {
+    /// The box of `order[start..end]` at `depth` nodes below the root, and below it its
+    /// nodes: two levels of splits ([`TriMesh::halve`]) give a node's children.
+    fn split(
+        &mut self,
+        boxes: &[(DVec3, DVec3, DVec3)],
+        start: usize,
+        end: usize,
+        depth: usize,
+    ) -> Child {
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for &k in &self.order[start..end] {
             let (a, b, _) = boxes[k as usize];
@@ -502,11 +521,12 @@ impl TriMesh {
                 count: (end - start) as u32,
             };
         }
-        let mid = self.halve(boxes, start, end);
+        let sah = depth < SAH_DEPTH;
+        let mid = self.halve(boxes, start, end, sah);
         let mut ranges = Vec::with_capacity(WIDTH);
         for (a, b) in [(start, mid), (mid, end)] {
             if b - a > LEAF_SIZE {
-                let m = self.halve(boxes, a, b);
+                let m = self.halve(boxes, a, b, sah);
                 ranges.extend([(a, m), (m, b)]);
             } else {
                 ranges.push((a, b));
@@ -521,7 +541,7 @@ impl TriMesh {
             children: [none; WIDTH],
         });
         for (i, (a, b)) in ranges.into_iter().enumerate() {
-            self.nodes[me].children[i] = self.split(boxes, a, b);
+            self.nodes[me].children[i] = self.split(boxes, a, b, depth + 1);
         }
         Child {
             bounds,
@@ -530,15 +550,36 @@ impl TriMesh {
         }
     }
 
-    /// Orders `order[start..end]` about its median along the longest axis of the triangles'
-    /// centres; returns where the second half begins.
-    fn halve(&mut self, boxes: &[(DVec3, DVec3, DVec3)], start: usize, end: usize) -> usize {
+    /// Splits `order[start..end]` in two and returns where the second part begins: where the
+    /// surface area heuristic puts it (`sah`; binned centres on each axis, the cut that
+    /// least weighs each part's box area by its triangles), else, or when it finds no cut,
+    /// about the median along the longest axis of the centres.
+    fn halve(
+        &mut self,
+        boxes: &[(DVec3, DVec3, DVec3)],
+        start: usize,
+        end: usize,
+        sah: bool,
+    ) -> usize {
         let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for &k in &self.order[start..end] {
             let c = boxes[k as usize].2;
             (clo, chi) = (clo.min(c), chi.max(c));
         }
         let ext = chi - clo;
+        if sah && let Some((axis, cut)) = self.sah_cut(boxes, start, end, clo, ext) {
+            let bin = |k: u32| sah_bin(boxes[k as usize].2[axis], clo[axis], ext[axis]);
+            let mut mid = start;
+            for j in start..end {
+                if bin(self.order[j]) <= cut {
+                    self.order.swap(mid, j);
+                    mid += 1;
+                }
+            }
+            if mid > start && mid < end {
+                return mid;
+            }
+        }
         let axis = if ext.x >= ext.y && ext.x >= ext.z {
             0
         } else if ext.y >= ext.z {
@@ -553,11 +594,58 @@ impl TriMesh {
         mid
     }
 
+    /// The best cut of `order[start..end]` by the surface area heuristic: the axis and the
+    /// last bin of the first part, if any cut leaves both parts some triangles.
+    fn sah_cut(
+        &self,
+        boxes: &[(DVec3, DVec3, DVec3)],
+        start: usize,
+        end: usize,
+        clo: DVec3,
+        ext: DVec3,
+    ) -> Option<(usize, usize)> {
+        let area = |lo: DVec3, hi: DVec3| {
+            let d = (hi - lo).max(DVec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        let mut best: Option<(f64, usize, usize)> = None;
+        for axis in 0..3 {
+            if ext[axis] <= 0.0 {
+                continue;
+            }
+            let mut bins = [(0usize, DVec3::INFINITY, DVec3::NEG_INFINITY); SAH_BINS];
+            for &k in &self.order[start..end] {
+                let (lo, hi, c) = boxes[k as usize];
+                let b = &mut bins[sah_bin(c[axis], clo[axis], ext[axis])];
+                *b = (b.0 + 1, b.1.min(lo), b.2.max(hi));
+            }
+            // The first part's cost for each cut, then the second's from the other end.
+            let mut left = [0.0; SAH_BINS];
+            let (mut n, mut lo, mut hi) = (0, DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for (i, b) in bins.iter().enumerate() {
+                (n, lo, hi) = (n + b.0, lo.min(b.1), hi.max(b.2));
+                left[i] = n as f64 * area(lo, hi);
+            }
+            let (mut n, mut lo, mut hi) = (0, DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for cut in (0..SAH_BINS - 1).rev() {
+                let b = bins[cut + 1];
+                (n, lo, hi) = (n + b.0, lo.min(b.1), hi.max(b.2));
+                let cost = left[cut] + n as f64 * area(lo, hi);
+                let first = end - start - n;
+                if first > 0 && n > 0 && best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, cut));
+                }
+            }
+        }
+        best.map(|(_, axis, cut)| (axis, cut))
+    }
+
     /// Calls `f` with the place in `order` of every triangle whose boxes pass `keep`.
     fn visit(&self, keep: impl Fn(DVec3, DVec3) -> bool, mut f: impl FnMut(usize)) {
-        // Median splits keep the depth near log4(triangles / 4) ≤ 11, each level leaving at
-        // most three children behind: a fixed stack, no allocation per query.
-        let mut stack = [(0u32, 0u32); 64];
+        // At most `SAH_DEPTH` levels of heuristic cuts, then median splits (log4(triangles /
+        // 4) ≤ 11 more levels), each level leaving at most three children behind: a fixed
+        // stack, no allocation per query.
+        let mut stack = [(0u32, 0u32); 3 * (SAH_DEPTH + 12) + 1];
         let mut top = 0;
         if keep(self.root.lo(), self.root.hi()) {
             stack[0] = (self.root.link, self.root.count);
@@ -1304,6 +1392,40 @@ pub(crate) mod tests {
                 _ => {}
             }
         }
+    }
+
+    /// Triangles the surface area heuristic cannot cut (every centre at one point) and one it
+    /// would cut off alone at every level: the hierarchy falls back to median splits, stays
+    /// within its search stack, and a ray finds every sheet.
+    #[test]
+    fn a_hierarchy_of_triangles_no_cut_separates_is_still_searched_whole() {
+        let (mut v, mut t) = (Vec::new(), Vec::new());
+        for k in 0..3000u32 {
+            // Turned copies of one triangle about the x axis through (1, 0, 0): same centre.
+            let a = f64::from(k) * 0.001;
+            let (s, c) = a.sin_cos();
+            let p = |y: f64, z: f64| DVec3::new(1.0, y * c - z * s, y * s + z * c);
+            v.extend([p(-0.3, -0.2), p(0.3, -0.2), p(0.0, 0.4)]);
+            t.push([3 * k, 3 * k + 1, 3 * k + 2]);
+        }
+        for k in 0..40u32 {
+            let x = 2.0 + 10f64.powi(k as i32 % 12);
+            let n = v.len() as u32;
+            v.extend([
+                DVec3::new(x, -0.3, -0.2),
+                DVec3::new(x, 0.3, -0.2),
+                DVec3::new(x, 0.0, 0.4),
+            ]);
+            t.push([n, n + 1, n + 2]);
+        }
+        let m = TriMesh::new(v, t).expect("a mesh");
+        let ray = Ray::new(DVec3::new(0.0, 0.0, 0.01), DVec3::X);
+        let whole = intervals(&m, &ray);
+        // All coincident sheets merge into one at x = 1; the far ones each make their own.
+        assert_eq!(whole.len(), 1 + 12, "{whole:?}");
+        let mut found = Vec::new();
+        m.intervals_until(&ray, f64::INFINITY, Need::Overlapping, &mut found);
+        assert_eq!(found, whole);
     }
 
     /// The brute-force reference: the winding number of the half-line from the point out
