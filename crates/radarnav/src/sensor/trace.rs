@@ -607,6 +607,37 @@ mod tests {
         }
     }
 
+    /// Every band's trace of `ray` along the grid and through `fan` (made at the ray's origin;
+    /// `heading`: the ray's bearing) ends where the walk over the exhaustive intervals does;
+    /// `state` is kept from ray to ray, as a scan keeps it.
+    fn traces_equal_walk(
+        (tr, q, active): &mut (Tracer, RayQuery, Vec<Active>),
+        w: &World,
+        fan: &Fan,
+        heading: f64,
+        ray: &Ray,
+        budget: f64,
+        t_max: f64,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        for band in [Band::Radar, Band::Laser, Band::Surface] {
+            let all = w.ray_intervals_exhaustive(ray, t_max, q);
+            let whole = walk(
+                &mut SortedIntervals::new(all),
+                w,
+                band,
+                budget,
+                t_max,
+                None,
+                active,
+            );
+            let gridded = tr.trace(w, ray, band, budget, t_max);
+            proptest::prop_assert_eq!(gridded, whole, "{:?} {:?}", ray, band);
+            let fanned = tr.trace_in_fan(w, fan, heading, ray, band, budget, t_max);
+            proptest::prop_assert_eq!(fanned, whole, "{:?} {:?} fan", ray, band);
+        }
+        Ok(())
+    }
+
     proptest::proptest! {
         /// In a world whose materials are all solid or transparent, every band takes the
         /// first-solid query (along the grid, and through a fan) instead of the walk, and
@@ -620,7 +651,7 @@ mod tests {
             budget in prop_oneof![Just(0.0), 0.0..12.0f64, Just(f64::INFINITY)],
             t_max in 0.5..40.0f64,
         ) {
-            let (mut tr, mut q, mut active) = (Tracer::default(), RayQuery::default(), Vec::new());
+            let mut state = (Tracer::default(), RayQuery::default(), Vec::new());
             let mut fan = crate::world::Fan::default();
             for band in [Band::Radar, Band::Laser, Band::Surface] {
                 proptest::prop_assert!(w.is_binary(band));
@@ -629,15 +660,7 @@ mod tests {
                 let ray = Ray { dir: DVec3::new(ray.dir.x, ray.dir.y, ray.dir.z.abs()), ..ray };
                 let heading = ray.dir.y.atan2(ray.dir.x);
                 proptest::prop_assert!(w.fan(ray.origin, t_max, sectors, usize::MAX, &mut fan));
-                for band in [Band::Radar, Band::Laser, Band::Surface] {
-                    let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
-                    let whole =
-                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
-                    let gridded = tr.trace(&w, &ray, band, budget, t_max);
-                    proptest::prop_assert_eq!(gridded, whole, "{:?} {:?}", ray, band);
-                    let fanned = tr.trace_in_fan(&w, &fan, heading, &ray, band, budget, t_max);
-                    proptest::prop_assert_eq!(fanned, whole, "{:?} {:?} fan", ray, band);
-                }
+                traces_equal_walk(&mut state, &w, &fan, heading, &ray, budget, t_max)?;
             }
         }
     }
@@ -663,21 +686,13 @@ mod tests {
             };
             let w = crate::world::forest::plant_forest_of(&spec);
             proptest::prop_assert!(w.is_binary(Band::Laser));
-            let (mut tr, mut q, mut active) = (Tracer::default(), RayQuery::default(), Vec::new());
+            let mut state = (Tracer::default(), RayQuery::default(), Vec::new());
             let mut fan = crate::world::Fan::default();
             for ((x, y, z), heading, el) in rays {
                 let (s, c) = heading.sin_cos();
                 let ray = Ray::new(DVec3::new(x, y, z), DVec3::new(el.cos() * c, el.cos() * s, el.sin()));
                 proptest::prop_assert!(w.fan(ray.origin, t_max, 360, usize::MAX, &mut fan));
-                for band in [Band::Radar, Band::Laser, Band::Surface] {
-                    let all = w.ray_intervals_exhaustive(&ray, t_max, &mut q);
-                    let whole =
-                        walk(&mut SortedIntervals::new(all), &w, band, budget, t_max, None, &mut active);
-                    let gridded = tr.trace(&w, &ray, band, budget, t_max);
-                    proptest::prop_assert_eq!(gridded, whole, "{:?} {:?}", ray, band);
-                    let fanned = tr.trace_in_fan(&w, &fan, heading, &ray, band, budget, t_max);
-                    proptest::prop_assert_eq!(fanned, whole, "{:?} {:?} fan", ray, band);
-                }
+                traces_equal_walk(&mut state, &w, &fan, heading, &ray, budget, t_max)?;
             }
         }
     }

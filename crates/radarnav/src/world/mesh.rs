@@ -681,12 +681,6 @@ impl TriMesh {
         );
     }
 
-    /// Whether an interval of [`TriMesh::ray_intervals`] can overlap `(0, t_max)`
-    /// ([`Reach::may_meet`] of its bounds).
-    pub fn may_meet(&self, ray: &Ray, t_max: f64) -> bool {
-        Reach::of(self.bounds).may_meet(ray, ray.dir.recip(), t_max)
-    }
-
     /// Appends to `out` the disjoint intervals, in increasing order, where the ray's whole
     /// line is inside the mesh: between entries and exits for a closed mesh (by winding, so
     /// nested shells are one volume), a [`SURFACE_THICKNESS`] sheet at each crossing of an
@@ -1511,7 +1505,7 @@ pub(crate) mod tests {
             }
         }
 
-        /// A ray that `may_meet` turns away has no interval overlapping `(0, t_max)`, from
+        /// A ray that the mesh's [`Reach`] turns away has no interval overlapping `(0, t_max)`, from
         /// anywhere (inside the bounds too), for open and closed meshes; and the single-precision
         /// node bounds hold every vertex of their triangles.
         #[test]
@@ -1538,7 +1532,7 @@ pub(crate) mod tests {
                 dir = DVec3::X * dir.x.signum(); // along an axis, in faces' planes
             }
             let ray = Ray::new(origin, dir);
-            if !m.may_meet(&ray, t_max) {
+            if !Reach::of(m.aabb()).may_meet(&ray, ray.dir.recip(), t_max) {
                 let iv = intervals(&m, &ray);
                 prop_assert!(
                     !iv.iter().any(|&(a, b)| b > 0.0 && a < t_max),

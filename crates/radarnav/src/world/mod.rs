@@ -92,14 +92,14 @@ pub struct RayQuery {
     /// listed in several cells is tested once per ray ("mailboxing").
     stamps: Vec<u32>,
     stamp: u32,
-    /// The reciprocal of the current ray's direction, for box tests.
+    /// The reciprocal of the current ray's direction, for the mesh bounds tests (set only in
+    /// a world with meshes).
     inv: DVec3,
 }
 
 impl RayQuery {
     /// Starts a new ray over a world of `slots` objects and parts.
-    fn next_ray(&mut self, slots: usize, ray: &Ray) {
-        self.inv = ray.dir.recip();
+    fn next_ray(&mut self, slots: usize) {
         if self.stamps.len() < slots {
             self.stamps.resize(slots, 0);
         }
@@ -298,6 +298,8 @@ pub struct World {
     /// Per object that is a mesh, its [`mesh::Reach`]: a ray is tested against it (here,
     /// side by side) before the mesh is looked at.
     mesh_reach: Vec<Option<mesh::Reach>>,
+    /// Whether some object is a mesh: only then does a ray need its direction's reciprocal.
+    has_meshes: bool,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
     parts: Vec<Part>,
@@ -326,7 +328,7 @@ impl World {
     /// A world of `objects` whose material ids refer to `materials`.
     pub fn new(materials: MaterialTable, objects: Vec<Object>) -> Self {
         let aabbs: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.shape.aabb()).collect();
-        let mesh_reach = (objects.iter().zip(&aabbs))
+        let mesh_reach: Vec<Option<mesh::Reach>> = (objects.iter().zip(&aabbs))
             .map(|(o, &b)| matches!(o.shape, Shape::Mesh(_)).then(|| mesh::Reach::of(b)))
             .collect();
         let solid = objects
@@ -396,6 +398,7 @@ impl World {
             materials,
             objects,
             aabbs,
+            has_meshes: mesh_reach.iter().any(Option::is_some),
             mesh_reach,
             solid,
             parts,
@@ -464,7 +467,7 @@ impl World {
         stop_band: Option<Band>,
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
-        q.next_ray(self.objects.len() + self.parts.len(), ray);
+        self.start_ray(ray, q);
         OrderedIntervals {
             world: self,
             ray: *ray,
@@ -489,7 +492,7 @@ impl World {
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
         debug_assert_eq!(ray.origin, fan.origin());
-        q.next_ray(self.objects.len() + self.parts.len(), ray);
+        self.start_ray(ray, q);
         OrderedIntervals {
             world: self,
             ray: *ray,
@@ -498,6 +501,14 @@ impl World {
             frontier: f64::NEG_INFINITY,
             by_parts: stop_band.map_or(0, band_bit),
             q,
+        }
+    }
+
+    /// Readies `q` for a new ray.
+    fn start_ray(&self, ray: &Ray, q: &mut RayQuery) {
+        q.next_ray(self.objects.len() + self.parts.len());
+        if self.has_meshes {
+            q.inv = ray.dir.recip();
         }
     }
 
@@ -646,7 +657,7 @@ impl World {
         band: Band,
         q: &mut RayQuery,
     ) -> Option<Interval> {
-        q.next_ray(self.objects.len() + self.parts.len(), ray);
+        self.start_ray(ray, q);
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
         let (stamps, stamp, spans, inv) = (&mut q.stamps, q.stamp, &mut q.spans, q.inv);
