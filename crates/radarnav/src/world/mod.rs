@@ -23,7 +23,7 @@ use std::cmp::Ordering;
 use glam::{DVec2, DVec3};
 
 use grid::{CellWalk, Grid};
-use mesh::Need;
+use mesh::{BoxRay, Need};
 
 /// A solid in the world.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,9 +92,8 @@ pub struct RayQuery {
     /// listed in several cells is tested once per ray ("mailboxing").
     stamps: Vec<u32>,
     stamp: u32,
-    /// The reciprocal of the current ray's direction, for the mesh bounds tests (set only in
-    /// a world with meshes).
-    inv: DVec3,
+    /// The current ray prepared for the mesh bounds tests (set only in a world with meshes).
+    box_ray: BoxRay,
 }
 
 impl RayQuery {
@@ -508,7 +507,7 @@ impl World {
     fn start_ray(&self, ray: &Ray, q: &mut RayQuery) {
         q.next_ray(self.objects.len() + self.parts.len());
         if self.has_meshes {
-            q.inv = ray.dir.recip();
+            q.box_ray = BoxRay::of(ray);
         }
     }
 
@@ -521,10 +520,12 @@ impl World {
         q: &'q mut RayQuery,
     ) -> &'q [Interval] {
         q.intervals.clear();
-        let inv = ray.dir.recip();
+        let box_ray = BoxRay::of(ray);
         for i in 0..self.objects.len() {
             let (spans, out) = (&mut q.spans, &mut q.intervals);
-            self.object_intervals(i as u32, ray, inv, t_max, None, spans, |iv| out.push(iv));
+            self.object_intervals(i as u32, ray, &box_ray, t_max, None, spans, |iv| {
+                out.push(iv)
+            });
         }
         q.intervals.sort_by(entry_order);
         &q.intervals
@@ -541,7 +542,7 @@ impl World {
         self.test_part_with(
             part,
             ray,
-            q.inv,
+            &q.box_ray,
             t_max,
             Need::Overlapping,
             by_parts,
@@ -559,7 +560,7 @@ impl World {
         &self,
         part: u32,
         ray: &Ray,
-        inv: DVec3,
+        box_ray: &BoxRay,
         t_max: f64,
         need: Need,
         by_parts: u8,
@@ -616,7 +617,7 @@ impl World {
                     if t_in <= 0.0 && t_out > 0.0 && stamps[object as usize] != stamp =>
                 {
                     stamps[object as usize] = stamp;
-                    self.object_intervals(object, ray, inv, t_max, Some(need), spans, take);
+                    self.object_intervals(object, ray, box_ray, t_max, Some(need), spans, take);
                 }
                 // Its merged intervals are filed already.
                 Some((t_in, t_out)) if t_in <= 0.0 && t_out > 0.0 => {}
@@ -632,7 +633,7 @@ impl World {
                 _ => {}
             }
         } else {
-            self.object_intervals(object, ray, inv, t_max, Some(need), spans, take);
+            self.object_intervals(object, ray, box_ray, t_max, Some(need), spans, take);
         }
     }
 
@@ -660,7 +661,7 @@ impl World {
         self.start_ray(ray, q);
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
-        let (stamps, stamp, spans, inv) = (&mut q.stamps, q.stamp, &mut q.spans, q.inv);
+        let (stamps, stamp, spans, box_ray) = (&mut q.stamps, q.stamp, &mut q.spans, &q.box_ray);
         // Tests a part (objects not solid to the band are skipped) and keeps in `best`
         // whichever interval comes first in entry order.
         let mut test = |part: u32, best: &mut Option<Interval>| {
@@ -677,7 +678,7 @@ impl World {
             self.test_part_with(
                 part,
                 ray,
-                inv,
+                box_ray,
                 t_max,
                 Need::FirstEntry,
                 bit,
@@ -727,7 +728,7 @@ impl World {
         &self,
         index: u32,
         ray: &Ray,
-        inv: DVec3,
+        box_ray: &BoxRay,
         t_max: f64,
         need: Option<Need>,
         spans: &mut Vec<(f64, f64)>,
@@ -735,14 +736,14 @@ impl World {
     ) {
         // The cells along a ray list many meshes it passes by: their bounds first.
         if let Some(reach) = &self.mesh_reach[index as usize]
-            && !reach.may_meet(ray, inv, t_max)
+            && !reach.may_meet(box_ray, t_max)
         {
             return;
         }
         let obj = &self.objects[index as usize];
         spans.clear();
         match (&obj.shape, need) {
-            (Shape::Mesh(m), Some(need)) => m.intervals_until(ray, t_max, need, spans),
+            (Shape::Mesh(m), Some(need)) => m.intervals_until(ray, box_ray, t_max, need, spans),
             (shape, _) => shape.ray_intervals(ray, spans),
         }
         for &(t_in, t_out) in spans.iter() {
