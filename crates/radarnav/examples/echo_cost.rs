@@ -4,8 +4,8 @@
 //! so that the machine's drifting speed cancels out.
 //!
 //! `cargo run --release -p radarnav --example echo_cost` prints the medians;
-//! `... --example echo_cost -- all` (or `first`, `thesis`) scans 100 000 times in one mode,
-//! for a profiler.
+//! `... --example echo_cost -- all [N]` (or `first`, `thesis`) scans N times (default
+//! 100 000) in one mode, for a profiler or an instruction counter.
 
 use radarnav::sensor::{ReturnMode, Tracer, preset};
 use radarnav::{Pose, Scenario};
@@ -30,7 +30,15 @@ fn main() {
             eprintln!("unknown mode {name}: thesis, all or first");
             std::process::exit(2);
         };
-        for _ in 0..100_000 {
+        let count = match std::env::args().nth(2).map(|n| n.parse::<usize>()) {
+            None => 100_000,
+            Some(Ok(n)) => n,
+            Some(Err(e)) => {
+                eprintln!("scan count: {e}");
+                std::process::exit(2);
+            }
+        };
+        for _ in 0..count {
             black_box(c.scan(&s.world, &pose, 0.0, &mut rng, &mut tracer));
         }
         return;

@@ -106,6 +106,9 @@ pub struct EchoModel {
     pub dynamic_range_db: f64,
     /// Specular bounces followed per ray.
     pub max_bounces: u8,
+    /// Echoes weaker than this, dB, are dropped too (a detection threshold, where nothing
+    /// under it is wanted); `f64::NEG_INFINITY` keeps all above the dynamic range.
+    pub min_power_db: f64,
     /// `(n, threshold_db)` when the caller keeps only the first `n` echoes (by range) at or
     /// above `threshold_db`: the walk then stops once it has them, since every echo found
     /// later lies at or beyond their range and sorts after them (`None`: every echo).
@@ -237,8 +240,8 @@ impl EchoTracer {
         start: usize,
         out: &mut Vec<Echo>,
     ) -> Option<f64> {
-        let ray = leg.ray;
-        let floor = -model.dynamic_range_db;
+        let ray = &leg.ray;
+        let floor = model.min_power_db.max(-model.dynamic_range_db);
         // The ground plane z = 0 is a solid under every world.
         let t_ground = if ray.dir.z < 0.0 {
             (-ray.origin.z / ray.dir.z).max(0.0)
@@ -248,15 +251,10 @@ impl EchoTracer {
         let reach = leg.t_max.min(t_ground);
         let materials = world.materials();
         let mut intervals = match fan {
-            Some((fan, heading)) => world.fan_intervals(
-                fan,
-                &ray,
-                heading,
-                reach,
-                Some(Band::Radar),
-                &mut self.query,
-            ),
-            None => world.ordered_intervals(&ray, reach, Some(Band::Radar), &mut self.query),
+            Some((fan, heading)) => {
+                world.fan_intervals(fan, ray, heading, reach, Some(Band::Radar), &mut self.query)
+            }
+            None => world.ordered_intervals(ray, reach, Some(Band::Radar), &mut self.query),
         };
         let active = &mut self.active;
         active.clear();
@@ -490,6 +488,7 @@ mod tests {
             range_law: RangeLaw::R2,
             dynamic_range_db: 80.0,
             max_bounces: 2,
+            min_power_db: f64::NEG_INFINITY,
             wanted: None,
         };
         let mut t = EchoTracer::default();
@@ -527,6 +526,7 @@ mod tests {
             range_law: law,
             dynamic_range_db: 200.0,
             max_bounces: 2,
+            min_power_db: f64::NEG_INFINITY,
             wanted: None,
         }
     }
@@ -711,6 +711,7 @@ mod tests {
                 range_law: RangeLaw::R2,
                 dynamic_range_db: 80.0,
                 max_bounces: 2,
+                min_power_db: f64::NEG_INFINITY,
                 wanted: None,
             };
             let capped = EchoModel { wanted: Some((n, threshold)), ..m };

@@ -311,7 +311,12 @@ impl SensorConfig {
 
     /// A scan of this sensor at `pose` and `stamp` with room for its rays and none filled in.
     fn empty_scan(&self, pose: &Pose, stamp: f64) -> Scan {
-        let n = self.azimuth_count() * self.elevations.len();
+        self.empty_scan_for(pose, stamp, self.azimuth_count() * self.elevations.len())
+    }
+
+    /// [`SensorConfig::empty_scan`] with room for `n` rays (a part of a scan traced in
+    /// parallel holds a chunk of its rays).
+    fn empty_scan_for(&self, pose: &Pose, stamp: f64, n: usize) -> Scan {
         Scan {
             stamp,
             kind: self.kind,

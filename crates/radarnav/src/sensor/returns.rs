@@ -12,16 +12,6 @@ use super::{
 use crate::pose::Pose;
 use crate::world::{Band, Fan, MaterialTable, World};
 
-/// One azimuth's answer: its range before noise, how and on what it ended, which side beam
-/// answered, and how many echoes it reported (appended to a buffer beside it).
-struct Answer {
-    range: f64,
-    kind: HitKind,
-    material: Option<crate::world::MaterialId>,
-    beam: Beam,
-    echoes: u32,
-}
-
 impl SensorConfig {
     /// [`SensorConfig::trace_scan`] for the echo return modes.
     pub(super) fn trace_echo_scan(
@@ -48,71 +38,64 @@ impl SensorConfig {
             .map(|el| beam.iter().map(|b| (el + b.d_el).sin_cos()).collect())
             .collect();
         // Azimuth `i` is azimuth `k` of plane `plane` (counted, not divided, where serial).
-        let answer =
-            |tracer: &mut Tracer, i: usize, plane: usize, k: usize, kept: &mut Vec<Echo>| {
-                let az = angle_min + k as f64 * self.resolution;
-                let el = &planes[plane];
-                let select = draws.1.get(i).copied();
-                let side = draws.0[i].0;
-                self.answer(
-                    world, fan_ref, pose, az, el, &beam, side, select, tracer, kept,
-                )
-            };
+        let answer = |tracer: &mut Tracer, i: usize, plane: usize, k: usize, out: &mut Scan| {
+            let az = angle_min + k as f64 * self.resolution;
+            let el = &planes[plane];
+            let select = draws.1.get(i).copied();
+            let (side, noise) = draws.0[i];
+            self.answer(
+                world, fan_ref, pose, az, el, &beam, side, select, noise, tracer, out,
+            )
+        };
         let mut out = self.empty_scan(pose, stamp);
-        // Echoes go straight into one buffer per chunk of azimuths (the scan's own when
-        // serial), not into a vector per azimuth: an allocation per azimuth cost as much as a
-        // sixth of an `all` scan.
-        let answers: Vec<Answer> = if n * beam.len() >= parallel_min {
+        let all = self.signal.return_mode == ReturnMode::All;
+        // Each answer is filed straight into the scan (a chunk's own when parallel), its
+        // echoes into one buffer: an allocation per azimuth cost as much as a sixth of an
+        // `all` scan, and an answer returned as a value and then filed was read back eight
+        // bytes at a time from small fields just written one by one, which stalls the store
+        // buffer once per azimuth.
+        if n * beam.len() >= parallel_min {
             let chunk = PARALLEL_CHUNK / beam.len().max(1) + 1;
-            let parts: Vec<(Vec<Answer>, Vec<Echo>)> = (0..n.div_ceil(chunk))
+            let parts: Vec<Scan> = (0..n.div_ceil(chunk))
                 .into_par_iter()
                 .map(|c| {
                     with_pool_tracer(|t| {
-                        let mut kept = Vec::new();
-                        let answers = (c * chunk..n.min((c + 1) * chunk))
-                            .map(|i| answer(t, i, i / azimuths, i % azimuths, &mut kept))
-                            .collect();
-                        (answers, kept)
+                        let rays = c * chunk..n.min((c + 1) * chunk);
+                        let mut part = self.empty_scan_for(pose, stamp, rays.len());
+                        for i in rays {
+                            answer(t, i, i / azimuths, i % azimuths, &mut part);
+                        }
+                        part
                     })
                 })
                 .collect();
-            let mut answers = Vec::with_capacity(n);
-            for (a, e) in parts {
-                answers.extend(a);
-                out.echoes.extend(e);
+            for part in parts {
+                let offset = out.echoes.len() as u32;
+                out.ranges.extend(part.ranges);
+                out.hits.extend(part.hits);
+                out.materials.extend(part.materials);
+                out.beams.extend(part.beams);
+                out.echo_start
+                    .extend(part.echo_start.iter().map(|s| s + offset));
+                out.echoes.extend(part.echoes);
             }
-            answers
         } else {
-            let mut answers = Vec::with_capacity(n);
             for plane in 0..self.elevations.len() {
                 for k in 0..azimuths {
-                    let i = plane * azimuths + k;
-                    answers.push(answer(tracer, i, plane, k, &mut out.echoes));
+                    answer(tracer, plane * azimuths + k, plane, k, &mut out);
                 }
             }
-            answers
-        };
-        tracer.fan = fan;
-        let all = self.signal.return_mode == ReturnMode::All;
-        let mut start = 0;
-        for (a, (_, noise)) in answers.into_iter().zip(&draws.0) {
-            out.ranges.push(self.reported_range(a.range, *noise) as f32);
-            out.hits.push(a.kind);
-            out.materials.push(a.material);
-            out.beams.push(a.beam);
-            if all {
-                out.echo_start.push(start);
-                start += a.echoes;
-            }
         }
+        tracer.fan = fan;
         if all {
             out.echo_start.push(out.echoes.len() as u32);
         }
         out
     }
 
-    /// Walks every beam ray of one azimuth, picks the answering ray and its range; in `all`
-    /// mode appends the echoes it reports to `kept`.
+    /// Walks every beam ray of one azimuth, picks the answering ray and files its reading
+    /// (range with `noise`, hit kind, material, beam) in `out`; in `all` mode also the echoes
+    /// it reports.
     #[allow(clippy::too_many_arguments)]
     fn answer(
         &self,
@@ -124,11 +107,14 @@ impl SensorConfig {
         beam: &[BeamRay],
         side: Beam,
         select: Option<f64>,
+        noise: f64,
         tracer: &mut Tracer,
-        kept: &mut Vec<Echo>,
-    ) -> Answer {
+        out: &mut Scan,
+    ) {
         let sig = &self.signal;
         let mut model = sig.echo_model();
+        // Only echoes a receiver can tell from noise count: the walk drops the others.
+        model.min_power_db = sig.detection_threshold_db;
         // The tracer's buffers: the echo walk's, and per beam ray where its echoes start in
         // `echoes` and its first incidence cosine.
         let Tracer {
@@ -165,95 +151,119 @@ impl SensorConfig {
                 _ => None,
             };
         }
-        for (r, (b, &el)) in beam.iter().zip(el_sin_cos).enumerate() {
-            let start = echoes.len();
-            if fixed.is_some_and(|c| c != r) {
-                spans.push((start, 1.0));
-                continue;
-            }
-            let ray = beam_ray(pose, az + b.d_az, el, b.lateral);
+        let all = sig.return_mode == ReturnMode::All;
+        // Walks beam ray `r`, appending its echoes to `buf` by range; returns the incidence
+        // cosine at its first surface.
+        let mut walk = |r: usize, buf: &mut Vec<Echo>| {
+            let (b, start) = (&beam[r], buf.len());
+            let ray = beam_ray(pose, az + b.d_az, el_sin_cos[r], b.lateral);
             let (w, max) = (b.weight, self.range_max);
             let cos = match fan {
                 Some(fan) => {
                     let heading = pose.yaw + az + b.d_az;
-                    echo.echoes_in_fan(world, fan, heading, &ray, w, max, &model, echoes)
+                    echo.echoes_in_fan(world, fan, heading, &ray, w, max, &model, buf)
                 }
-                None => echo.echoes(world, &ray, w, max, &model, echoes),
+                None => echo.echoes(world, &ray, w, max, &model, buf),
             };
-            // Only echoes a receiver can tell from noise count; each ray's by range.
-            let mut k = start;
-            for j in start..echoes.len() {
-                if echoes[j].power_db >= sig.detection_threshold_db {
-                    echoes[k] = echoes[j];
-                    k += 1;
+            // A leg's echoes come in range order, a ghost's after them.
+            let mine = &mut buf[start..];
+            if !mine.is_sorted_by(|a, b| a.range <= b.range) {
+                mine.sort_by(|a, b| a.range.total_cmp(&b.range));
+            }
+            cos
+        };
+        let (chosen, reading, reported) = match fixed {
+            // Only the answering ray is walked, in `all` mode straight into the scan's buffer.
+            Some(chosen) if all => {
+                let kept = &mut out.echoes;
+                let start = kept.len();
+                walk(chosen, kept);
+                let reading = self.reading(&kept[start..], world);
+                let reported = (kept.len() - start).min(sig.max_echoes);
+                kept.truncate(start + reported);
+                (chosen, reading, reported)
+            }
+            Some(chosen) => {
+                walk(chosen, echoes);
+                (chosen, self.reading(echoes, world), 0)
+            }
+            None => {
+                for r in 0..rays {
+                    let start = echoes.len();
+                    let cos = walk(r, echoes);
+                    spans.push((start, cos));
                 }
+                spans.push((echoes.len(), 0.0));
+                let of = |r: usize| &echoes[spans[r].0..spans[r + 1].0];
+                // The selections that look at the echoes (`uniform` was made above).
+                let chosen = match sig.selection {
+                    Selection::IncidenceWeighted => {
+                        let total: f64 = spans[..rays].iter().map(|s| s.1).sum();
+                        let u = select.unwrap_or(0.0) * total;
+                        let mut acc = 0.0;
+                        (0..rays)
+                            .find(|&r| {
+                                acc += spans[r].1;
+                                u < acc
+                            })
+                            .unwrap_or(rays - 1)
+                    }
+                    Selection::Nearest => (0..rays)
+                        .filter_map(|r| of(r).first().map(|e| (r, e.range)))
+                        .min_by(|a, b| a.1.total_cmp(&b.1))
+                        .map_or(0, |x| x.0),
+                    Selection::Strongest | Selection::Uniform => (0..rays)
+                        .filter_map(|r| {
+                            of(r)
+                                .iter()
+                                .map(|e| e.power_db)
+                                .max_by(f64::total_cmp)
+                                .map(|p| (r, p))
+                        })
+                        .max_by(|a, b| a.1.total_cmp(&b.1))
+                        .map_or(0, |x| x.0),
+                };
+                let mine = of(chosen);
+                let reported = if all {
+                    let mine = &mine[..mine.len().min(sig.max_echoes)];
+                    out.echoes.extend_from_slice(mine);
+                    mine.len()
+                } else {
+                    0
+                };
+                (chosen, self.reading(mine, world), reported)
             }
-            echoes.truncate(k);
-            if k - start > 1 {
-                echoes[start..].sort_by(|a, b| a.range.total_cmp(&b.range));
-            }
-            spans.push((start, cos));
-        }
-        spans.push((echoes.len(), 0.0));
-        let of = |r: usize| &echoes[spans[r].0..spans[r + 1].0];
-        // The selections that look at the echoes (`uniform` was made above).
-        let chosen = fixed.unwrap_or_else(|| match sig.selection {
-            Selection::IncidenceWeighted => {
-                let total: f64 = spans[..rays].iter().map(|s| s.1).sum();
-                let u = select.unwrap_or(0.0) * total;
-                let mut acc = 0.0;
-                (0..rays)
-                    .find(|&r| {
-                        acc += spans[r].1;
-                        u < acc
-                    })
-                    .unwrap_or(rays - 1)
-            }
-            Selection::Nearest => (0..rays)
-                .filter_map(|r| of(r).first().map(|e| (r, e.range)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map_or(0, |x| x.0),
-            Selection::Strongest | Selection::Uniform => (0..rays)
-                .filter_map(|r| {
-                    of(r)
-                        .iter()
-                        .map(|e| e.power_db)
-                        .max_by(f64::total_cmp)
-                        .map(|p| (r, p))
-                })
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-                .map_or(0, |x| x.0),
-        });
-        let mine = of(chosen);
-        let pick = match sig.return_mode {
-            ReturnMode::Strongest => mine.iter().max_by(|a, b| a.power_db.total_cmp(&b.power_db)),
-            ReturnMode::Last => mine.last(),
-            _ => mine.first(),
         };
-        let materials = world.materials();
-        let (range, kind, material) = match pick {
-            Some(e) => (e.range, hit_kind(e, materials), Some(e.material)),
-            None => (f64::INFINITY, HitKind::None, None),
-        };
-        let beam_of = |r: usize| match (beam.len(), r) {
+        let (range, kind, material) = reading;
+        let beam = match (beam.len(), chosen) {
             (3, 1) if beam[1].lateral > 0.0 => Beam::Left,
             (3, 2) if beam[2].lateral < 0.0 => Beam::Right,
             _ => Beam::Center,
         };
-        let reported = if sig.return_mode == ReturnMode::All {
-            let mine = &mine[..mine.len().min(sig.max_echoes)];
-            kept.extend_from_slice(mine);
-            mine.len() as u32
-        } else {
-            0
+        out.ranges.push(self.reported_range(range, noise) as f32);
+        out.hits.push(kind);
+        out.materials.push(material);
+        out.beams.push(beam);
+        if all {
+            out.echo_start.push((out.echoes.len() - reported) as u32);
+        }
+    }
+
+    /// The reading the return mode takes from the answering ray's echoes (by range, all
+    /// above the detection threshold): its range, hit kind and material.
+    fn reading(
+        &self,
+        mine: &[Echo],
+        world: &World,
+    ) -> (f64, HitKind, Option<crate::world::MaterialId>) {
+        let pick = match self.signal.return_mode {
+            ReturnMode::Strongest => mine.iter().max_by(|a, b| a.power_db.total_cmp(&b.power_db)),
+            ReturnMode::Last => mine.last(),
+            _ => mine.first(),
         };
-        let chosen_beam = beam_of(chosen);
-        Answer {
-            range,
-            kind,
-            material,
-            beam: chosen_beam,
-            echoes: reported,
+        match pick {
+            Some(e) => (e.range, hit_kind(e, world.materials()), Some(e.material)),
+            None => (f64::INFINITY, HitKind::None, None),
         }
     }
 }

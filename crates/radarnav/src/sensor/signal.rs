@@ -160,6 +160,7 @@ impl SignalConfig {
             range_law: self.range_law,
             dynamic_range_db: self.dynamic_range_db,
             max_bounces: self.max_bounces,
+            min_power_db: f64::NEG_INFINITY,
             wanted: None,
         }
     }
