@@ -49,6 +49,12 @@ impl SensorConfig {
         };
         let mut out = self.empty_scan(pose, stamp);
         let all = self.signal.return_mode == ReturnMode::All;
+        if all {
+            // Room for two echoes an azimuth up front (a growing buffer was reallocated and
+            // copied some twenty times a scan).
+            out.echo_start.reserve_exact(n + 1);
+            out.echoes.reserve(2 * n);
+        }
         // Each answer is filed straight into the scan (a chunk's own when parallel), its
         // echoes into one buffer: an allocation per azimuth cost as much as a sixth of an
         // `all` scan, and an answer returned as a value and then filed was read back eight
