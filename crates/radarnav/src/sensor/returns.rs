@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::echo::{Echo, EchoKind};
+use super::echo::{Echo, EchoKind, EchoModel};
 use super::signal::{BeamRay, ReturnMode, Selection};
 use super::{
     Beam, HitKind, PARALLEL_CHUNK, Scan, ScanDraws, SensorConfig, Tracer, beam_ray,
@@ -37,15 +37,39 @@ impl SensorConfig {
         let planes: Vec<Vec<(f64, f64)>> = (self.elevations.iter())
             .map(|el| beam.iter().map(|b| (el + b.d_el).sin_cos()).collect())
             .collect();
+        let sig = &self.signal;
+        // A selection that does not look at the echoes (one ray; `uniform`, drawn before the
+        // walk) is made first, and only the answering ray is walked: the others' echoes would
+        // be thrown away. The thesis radar's three side beams cost one walk, not three.
+        let fixed = beam.len() == 1 || sig.selection == Selection::Uniform;
+        let mut model = sig.echo_model();
+        // Only echoes a receiver can tell from noise count: the walk drops the others.
+        model.min_power_db = sig.detection_threshold_db;
+        // With the answering ray fixed, `first` and `all` want only its nearest echoes that
+        // count, and its walk may stop once it has them.
+        if fixed {
+            let threshold = sig.detection_threshold_db;
+            model.wanted = match sig.return_mode {
+                ReturnMode::First => Some((1, threshold)),
+                ReturnMode::All => Some((sig.max_echoes, threshold)),
+                _ => None,
+            };
+        }
+        let shared = EchoScan {
+            world,
+            fan: fan_ref,
+            pose,
+            beam: &beam,
+            model: &model,
+            fixed,
+        };
         // Azimuth `i` is azimuth `k` of plane `plane` (counted, not divided, where serial).
         let answer = |tracer: &mut Tracer, i: usize, plane: usize, k: usize, out: &mut Scan| {
             let az = angle_min + k as f64 * self.resolution;
             let el = &planes[plane];
             let select = draws.1.get(i).copied();
             let (side, noise) = draws.0[i];
-            self.answer(
-                world, fan_ref, pose, az, el, &beam, side, select, noise, tracer, out,
-            )
+            self.answer(&shared, az, el, side, select, noise, tracer, out)
         };
         let mut out = self.empty_scan(pose, stamp);
         let all = self.signal.return_mode == ReturnMode::All;
@@ -105,22 +129,24 @@ impl SensorConfig {
     #[allow(clippy::too_many_arguments)]
     fn answer(
         &self,
-        world: &World,
-        fan: Option<&Fan>,
-        pose: &Pose,
+        scan: &EchoScan,
         az: f64,
         el_sin_cos: &[(f64, f64)],
-        beam: &[BeamRay],
         side: Beam,
         select: Option<f64>,
         noise: f64,
         tracer: &mut Tracer,
         out: &mut Scan,
     ) {
+        let &EchoScan {
+            world,
+            fan,
+            pose,
+            beam,
+            model,
+            fixed,
+        } = scan;
         let sig = &self.signal;
-        let mut model = sig.echo_model();
-        // Only echoes a receiver can tell from noise count: the walk drops the others.
-        model.min_power_db = sig.detection_threshold_db;
         // The tracer's buffers: the echo walk's, and per beam ray where its echoes start in
         // `echoes` and its first incidence cosine.
         let Tracer {
@@ -132,31 +158,17 @@ impl SensorConfig {
         echoes.clear();
         spans.clear();
         let rays = beam.len();
-        // A selection that does not look at the echoes (one ray; `uniform`, drawn before the
-        // walk) is made first, and only the answering ray is walked: the others' echoes would
-        // be thrown away. The thesis radar's three side beams cost one walk, not three.
-        let fixed = match sig.selection {
+        // The answering ray, where the selection is made before the walk.
+        let answering = match select {
+            _ if !fixed => None,
             _ if rays == 1 => Some(0),
-            Selection::Uniform => Some(match select {
-                Some(u) => ((u * rays as f64) as usize).min(rays - 1),
-                None => match side {
-                    Beam::Center => 0,
-                    Beam::Left => 1,
-                    Beam::Right => 2,
-                },
+            Some(u) => Some(((u * rays as f64) as usize).min(rays - 1)),
+            None => Some(match side {
+                Beam::Center => 0,
+                Beam::Left => 1,
+                Beam::Right => 2,
             }),
-            _ => None,
         };
-        // With the answering ray fixed, `first` and `all` want only its nearest echoes that
-        // count, and its walk may stop once it has them.
-        if fixed.is_some() {
-            let threshold = sig.detection_threshold_db;
-            model.wanted = match sig.return_mode {
-                ReturnMode::First => Some((1, threshold)),
-                ReturnMode::All => Some((sig.max_echoes, threshold)),
-                _ => None,
-            };
-        }
         let all = sig.return_mode == ReturnMode::All;
         // Walks beam ray `r`, appending its echoes to `buf` by range; returns the incidence
         // cosine at its first surface.
@@ -167,9 +179,9 @@ impl SensorConfig {
             let cos = match fan {
                 Some(fan) => {
                     let heading = pose.yaw + az + b.d_az;
-                    echo.echoes_in_fan(world, fan, heading, &ray, w, max, &model, buf)
+                    echo.echoes_in_fan(world, fan, heading, &ray, w, max, model, buf)
                 }
-                None => echo.echoes(world, &ray, w, max, &model, buf),
+                None => echo.echoes(world, &ray, w, max, model, buf),
             };
             // A leg's echoes come in range order, a ghost's after them.
             let mine = &mut buf[start..];
@@ -178,7 +190,7 @@ impl SensorConfig {
             }
             cos
         };
-        let (chosen, reading, reported) = match fixed {
+        let (chosen, reading, reported) = match answering {
             // Only the answering ray is walked, in `all` mode straight into the scan's buffer.
             Some(chosen) if all => {
                 let kept = &mut out.echoes;
@@ -272,6 +284,19 @@ impl SensorConfig {
             None => (f64::INFINITY, HitKind::None, None),
         }
     }
+}
+
+/// What every azimuth of one echo scan shares.
+struct EchoScan<'a> {
+    world: &'a World,
+    /// The scan's candidate lists, where its rays share an origin.
+    fan: Option<&'a Fan>,
+    pose: &'a Pose,
+    beam: &'a [BeamRay],
+    /// The echo walk's settings, the same for every ray of the scan.
+    model: &'a EchoModel,
+    /// Whether the answering ray is chosen before the walk (one ray, or `uniform`).
+    fixed: bool,
 }
 
 /// An echo as a hit kind: the surface of a material the radar cannot enter is `solid`, any
