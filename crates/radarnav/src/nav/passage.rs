@@ -26,8 +26,11 @@
 //!
 //! A gap can look wider from afar than the way through it is (returns on box corners, range
 //! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
-//! again, and after three tries gives the gap up, backing out along the line
-//! through it to the approach point, where there is room to turn and follow on. Both ends
+//! again, and after three tries gives the gap up, backing out to the approach point, where
+//! there is room to turn and follow on. It backs out steered by the sides it sees beside the
+//! body ([`back_out_turn`]), not along the line through the gap: that line is held in the
+//! believed frame, and a way leaning off it or the odometry's heading drift bring a flank
+//! onto a side within metres, where a 270° laser is blind. Both ends
 //! leave the robot where the follower can go on, never wedged in the gap's mouth turning or
 //! shuffling until a timeout.
 //!
@@ -57,7 +60,8 @@ const AT_APPROACH: f64 = 0.1;
 const ALIGNED: f64 = 0.03;
 /// Look-ahead along the line through the gap, m.
 const LOOK_AHEAD: f64 = 0.5;
-/// Give up on a gap after this long, s.
+/// Give up on a gap after this long, s; backing out of it once given up has as long again
+/// from then (cut short, it would leave the robot inside the way, facing its far end).
 const PASS_TIMEOUT: f64 = 60.0;
 /// A sighting whose normal is within this cosine of the held one is the same gap (10°).
 const REFINE_COS: f64 = 0.985;
@@ -71,6 +75,98 @@ const RETREAT_ALIGNED: f64 = 0.2;
 /// Times the way ahead may block a pass before the gap is given up: backing out and driving
 /// in again meets the same sides (a gap narrower than it looked from afar).
 const PASS_BLOCKS: u32 = 3;
+/// Backing out, sides farther from the body's flank than this are not steered by, m.
+const SIDE_REACH: f64 = 0.5;
+/// Backing out, a side is steered by when this many returns span [`SIDE_SPAN`] along it.
+const SIDE_POINTS: usize = 5;
+/// See [`SIDE_POINTS`], m.
+const SIDE_SPAN: f64 = 0.3;
+/// Backing out, a side is steered along when its line is within this of the body's axis, rad.
+const SIDE_ANGLE: f64 = 0.5;
+
+/// The turn, rad/s, that keeps a body of `length` × `width` m backing out between the sides
+/// among the robot-frame returns `points` parallel to them and centred (beside one side,
+/// parallel to it): `None` when no side lies within [`SIDE_REACH`] of its flanks.
+///
+/// A way is left the way it was entered, but a straight line back (the line through the gap,
+/// held in the believed frame) is off the way's own direction by the odometry's heading drift
+/// and by how the way turns or narrows (a wall piece leaning toward a room wall): a few
+/// degrees over metres of backing bring a flank onto a side, where the laser is blind (its
+/// back sector) and remembered returns have drifted with the odometry. So the sides seen
+/// beside the body steer it: a line fitted through each side's returns gives the way's
+/// direction, and the two nearest returns its middle.
+pub fn back_out_turn(points: &[DVec2], length: f64, width: f64) -> Option<f64> {
+    let flank = width / 2.0;
+    let beside = |q: &&DVec2| {
+        (-length..=length / 2.0 + LOOK_AHEAD).contains(&q.x)
+            && (flank..=flank + SIDE_REACH).contains(&q.y.abs())
+    };
+    // Each side: its direction (when enough returns span enough of it) and its nearest return.
+    let side = |sign: f64| {
+        let pts: Vec<DVec2> = points
+            .iter()
+            .filter(beside)
+            .filter(|q| q.y * sign > 0.0)
+            .copied()
+            .collect();
+        let nearest = pts.iter().map(|q| q.y.abs()).fold(f64::INFINITY, f64::min);
+        let (lo, hi) = pts
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+                (l.min(q.x), h.max(q.x))
+            });
+        let angle = (pts.len() >= SIDE_POINTS && hi - lo >= SIDE_SPAN).then(|| {
+            let n = pts.len() as f64;
+            let (mx, my) = pts
+                .iter()
+                .fold((0.0, 0.0), |(a, b), q| (a + q.x / n, b + q.y / n));
+            let (sxy, sxx) = pts.iter().fold((0.0, 0.0), |(a, b), q| {
+                (a + (q.x - mx) * (q.y - my), b + (q.x - mx) * (q.x - mx))
+            });
+            sxy.atan2(sxx)
+        });
+        // A line across the body's axis is no side of a way along it (a wall the robot
+        // backs away from, seen beside its front).
+        match angle {
+            Some(a) if a.abs() > SIDE_ANGLE => (None, f64::INFINITY),
+            _ => (angle, nearest),
+        }
+    };
+    let (left, right) = (side(1.0), side(-1.0));
+    let angles: Vec<f64> = [left.0, right.0].into_iter().flatten().collect();
+    if angles.is_empty() && left.1.is_infinite() && right.1.is_infinite() {
+        return None;
+    }
+    let angle = if angles.is_empty() {
+        0.0
+    } else {
+        angles.iter().sum::<f64>() / angles.len() as f64
+    };
+    // Between two sides, toward the middle (backing, the body's centre moves left when it
+    // turns right); beside one, along it.
+    let centring = if left.1.is_finite() && right.1.is_finite() {
+        -(0.5 * (left.1 - right.1)).atan2(LOOK_AHEAD)
+    } else {
+        0.0
+    };
+    Some((K_HEADING * (angle + centring)).clamp(-PASS_TURN, PASS_TURN))
+}
+
+/// Whether a body of `length` × `width` m may back off among the robot-frame returns
+/// `points`: fewer than [`HITS_TO_BLOCK`] lie in the strip 0.1 m deep past its rear face, as
+/// wide as the body and [`BODY_MARGIN`] either side.
+///
+/// Only past the rear face: beside the body nothing real lies within its width (it would
+/// touch), but the sides of a narrow way a few centimetres off put range noise there scan
+/// after scan, and counted, it stopped robots backing out of such ways halfway.
+pub fn behind_clear(points: &[DVec2], length: f64, width: f64) -> bool {
+    let (rear, half_width) = (-length / 2.0, width / 2.0 + BODY_MARGIN);
+    points
+        .iter()
+        .filter(|q| (rear - 0.1..=rear + BODY_MARGIN).contains(&q.x) && q.y.abs() <= half_width)
+        .count()
+        < HITS_TO_BLOCK
+}
 
 /// Whether a body of `length` × `width` m can turn on the spot among the robot-frame returns
 /// `points`: fewer than [`HITS_TO_BLOCK`] lie in the circle it sweeps (its half-diagonal
@@ -325,6 +421,8 @@ pub struct Passage {
     /// Times the way ahead blocked the pass, and whether the last step backed out.
     blocks: u32,
     backing: bool,
+    /// Given up, the robot has turned to face through the gap and is backing out.
+    backing_out: bool,
 }
 
 /// What a passage step asks for.
@@ -356,6 +454,7 @@ impl Passage {
             last: None,
             blocks: 0,
             backing: false,
+            backing_out: false,
         }
     }
 
@@ -371,6 +470,13 @@ impl Passage {
     pub fn committed(&self) -> bool {
         let entered = !matches!(self.phase, Phase::Approach | Phase::Align);
         entered && (!self.free_to_turn || self.about > 0.0)
+    }
+
+    /// Gives the gap up: back out to the approach point, with a clock of its own.
+    fn retreat(&mut self) {
+        self.phase = Phase::Retreat;
+        self.time = 0.0;
+        self.backing_out = false;
     }
 
     /// The world-frame gap being passed.
@@ -432,9 +538,20 @@ impl Passage {
         let (v, omega) = match self.phase {
             Phase::Retreat if t <= -approach => return PassStep::Blocked,
             // Facing through the gap first (undoing a dead-end turn cut short retraces what
-            // the body swept), then straight back.
-            Phase::Retreat if toward_normal.abs() > RETREAT_ALIGNED => (0.0, face),
-            Phase::Retreat => (-BACK_SPEED, face),
+            // the body swept), then back, steered by the way's sides: a way leaning off the
+            // line through the gap takes the heading past the alignment tolerance, and
+            // turning back to face through it there would fight the sides' steer.
+            Phase::Retreat if !self.backing_out && toward_normal.abs() > RETREAT_ALIGNED => {
+                (0.0, face)
+            }
+            Phase::Retreat => {
+                self.backing_out = true;
+                // Between the sides while part of the body is still past the gap's line.
+                let sides = (t > -length / 2.0)
+                    .then(|| back_out_turn(points, length, width))
+                    .flatten();
+                (-BACK_SPEED, sides.unwrap_or(face))
+            }
             Phase::Approach => {
                 let a = g.mid - g.normal * approach;
                 if (a - p).length() < AT_APPROACH {
@@ -505,8 +622,7 @@ impl Passage {
         };
         let ahead_clear =
             clear(&|q| q.x <= half.0 + 0.15 && q.x >= -half.0 - BODY_MARGIN && q.y.abs() <= half.1);
-        let behind_clear =
-            clear(&|q| q.x >= -half.0 - 0.1 && q.x <= half.0 + BODY_MARGIN && q.y.abs() <= half.1);
+        let behind_clear = behind_clear(points, length, width);
         let turn_clear = turn_clear(points, length, width);
         if self.phase == Phase::Retreat {
             return if v == 0.0 || behind_clear {
@@ -522,7 +638,7 @@ impl Passage {
         if self.phase == Phase::Through && (self.about > 0.0 || v > 0.0 && !ahead_clear) {
             // No room to turn about: back out the way in instead.
             if !turn_clear {
-                self.phase = Phase::Retreat;
+                self.retreat();
                 self.about = 0.0;
                 return PassStep::Drive(0.0, 0.0);
             }
@@ -545,7 +661,7 @@ impl Passage {
                 if !self.backing {
                     self.blocks += 1;
                     if self.blocks >= PASS_BLOCKS {
-                        self.phase = Phase::Retreat;
+                        self.retreat();
                     }
                 }
                 self.backing = true;
@@ -871,18 +987,94 @@ mod tests {
     fn a_dead_end_too_narrow_to_turn_in_is_backed_out_of() {
         // A way as wide as the doorway, 0.74 m (the body's turning circle is 0.75 m), closed
         // 1.5 m in: no room to turn about at its end, so the robot backs out along it.
+        backs_out_of_a_dead_end(1.5, 0.0);
+    }
+
+    /// Drives into a way as wide as a 0.74 m doorway (the body's turning circle is 0.75 m)
+    /// behind it, closed `depth` metres in and leaning `lean_deg` off the line through the
+    /// doorway: the robot drives to within 0.7 m of its end, backs out without touching it
+    /// and gives the gap up from in front of it.
+    fn backs_out_of_a_dead_end(depth: f64, lean_deg: f64) {
         let door = 0.74;
+        let (end_y, lean) = (-1.0 - depth, lean_deg.to_radians().tan() * depth);
         let mut walls = doorway(door);
         walls.extend([
-            (DVec2::new(1.0, -1.0), DVec2::new(1.0, -2.5)),
-            (DVec2::new(1.0, -2.5), DVec2::new(1.0 + door, -2.5)),
-            (DVec2::new(1.0 + door, -2.5), DVec2::new(1.0 + door, -1.0)),
+            (DVec2::new(1.0, -1.0), DVec2::new(1.0 + lean, end_y)),
+            (
+                DVec2::new(1.0 + lean, end_y),
+                DVec2::new(1.0 + door + lean, end_y),
+            ),
+            (
+                DVec2::new(1.0 + door + lean, end_y),
+                DVec2::new(1.0 + door, -1.0),
+            ),
         ]);
         let mut deepest = f64::INFINITY;
         let (end, pose, _) = drive(&walls, Pose::default(), |_, p| deepest = deepest.min(p.y));
         assert_eq!(end, PassStep::Blocked);
-        assert!(deepest < -1.8, "went {deepest} m in");
+        assert!(deepest < end_y + 0.7, "went {deepest} m in");
         given_up_in_front(&pose, door);
+    }
+
+    #[test]
+    fn a_leaning_dead_end_is_backed_out_of_along_its_own_sides() {
+        // A way 0.74 m wide (too narrow to turn in) and 3 m long behind the doorway, leaning
+        // 4° off the line through the doorway: straight back along that line, the body would
+        // come 0.21 m across by the mouth, and its flanks are 0.12 m off the sides. Steered by
+        // the sides it backs out all the way to the approach point without touching them.
+        backs_out_of_a_dead_end(3.0, 4.0);
+    }
+
+    #[test]
+    fn range_noise_beside_the_body_does_not_block_backing_and_a_return_behind_it_does() {
+        let (length, width) = (0.508, 0.497);
+        // Three stray returns 1 cm inside each flank (a side 0.1 m off, in range noise).
+        let beside: Vec<DVec2> = [-0.2, 0.0, 0.2]
+            .into_iter()
+            .flat_map(|x| [DVec2::new(x, 0.24), DVec2::new(x, -0.24)])
+            .collect();
+        assert!(behind_clear(&beside, length, width));
+        // A wall 5 cm behind the rear face.
+        let wall: Vec<DVec2> = (-5..=5)
+            .map(|i| DVec2::new(-0.304, i as f64 * 0.05))
+            .collect();
+        assert!(!behind_clear(&wall, length, width));
+        // Farther behind than the strip, or beside the strip: clear.
+        let far: Vec<DVec2> = wall.iter().map(|q| *q - DVec2::new(0.1, 0.0)).collect();
+        assert!(behind_clear(&far, length, width));
+        let wide: Vec<DVec2> = wall.iter().map(|q| *q + DVec2::new(0.0, 0.6)).collect();
+        assert!(behind_clear(&wide, length, width));
+    }
+
+    #[test]
+    fn backing_out_turns_along_the_sides_and_toward_the_middle() {
+        let (length, width) = (0.508, 0.497);
+        // Two sides 0.36 m either side of `centre`, leaning `angle` off the body's axis,
+        // every 2 cm from 0.6 m behind to 0.6 m ahead.
+        let sides = |angle: f64, centre: f64| -> Vec<DVec2> {
+            let u = DVec2::from_angle(angle);
+            (-30..=30)
+                .flat_map(|i| {
+                    let along = u * (i as f64 * 0.02);
+                    [-0.36, 0.36].map(|y| along + u.perp() * y + DVec2::new(0.0, centre))
+                })
+                .collect()
+        };
+        let turn = |pts: &[DVec2]| back_out_turn(pts, length, width).expect("sides");
+        // Parallel and centred: straight back.
+        assert!(turn(&sides(0.0, 0.0)).abs() < 1e-9);
+        // Leaning left: turn left to lie along them, whichever way the body moves.
+        assert!(turn(&sides(0.05, 0.0)) > 0.05);
+        assert!(turn(&sides(-0.05, 0.0)) < -0.05);
+        // The middle 5 cm to the left: backing, the centre goes left when the body turns right.
+        assert!(turn(&sides(0.0, 0.05)) < -0.05);
+        assert!(turn(&sides(0.0, -0.05)) > 0.05);
+        // One side only, leaning: along it.
+        let right: Vec<DVec2> = sides(0.05, 0.0).into_iter().filter(|q| q.y < 0.0).collect();
+        assert!(turn(&right) > 0.0);
+        // Nothing beside the body within reach: no say.
+        assert_eq!(back_out_turn(&sides(0.0, 2.0), length, width), None);
+        assert_eq!(back_out_turn(&[], length, width), None);
     }
 
     #[test]
