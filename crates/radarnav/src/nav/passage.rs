@@ -30,9 +30,9 @@
 //! there is room to turn and follow on. It backs out steered by the sides it sees beside the
 //! body ([`back_out_turn`]), not along the line through the gap: that line is held in the
 //! believed frame, and a way leaning off it or the odometry's heading drift bring a flank
-//! onto a side within metres, where a 270° laser is blind. Both ends
-//! leave the robot where the follower can go on, never wedged in the gap's mouth turning or
-//! shuffling until a timeout.
+//! onto a side within metres, where a 270° laser is blind. Both ends leave the robot where
+//! the follower can go on, never wedged in the gap's mouth turning or shuffling until a
+//! timeout.
 //!
 //! Returns are taken in the order the sensor's rays swept (by angle about the sensor, not the
 //! robot's centre), and the gap's width is counted half a ray spacing narrower at each end:
