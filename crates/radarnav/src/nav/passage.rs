@@ -28,7 +28,7 @@
 //! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
 //! again, and after three tries gives the gap up, backing out to the approach point, where
 //! there is room to turn and follow on. It backs out steered by the sides it sees beside the
-//! body ([`back_out_turn`]), not along the line through the gap: that line is held in the
+//! body (`back_out_turn`), not along the line through the gap: that line is held in the
 //! believed frame, and a way leaning off it or the odometry's heading drift bring a flank
 //! onto a side within metres, where a 270° laser is blind. Both ends leave the robot where
 //! the follower can go on, never wedged in the gap's mouth turning or shuffling until a
@@ -95,7 +95,7 @@ const SIDE_ANGLE: f64 = 0.5;
 /// back sector) and remembered returns have drifted with the odometry. So the sides seen
 /// beside the body steer it: a line fitted through each side's returns gives the way's
 /// direction, and the two nearest returns its middle.
-pub fn back_out_turn(points: &[DVec2], length: f64, width: f64) -> Option<f64> {
+fn back_out_turn(points: &[DVec2], length: f64, width: f64) -> Option<f64> {
     let flank = width / 2.0;
     let beside = |q: &&DVec2| {
         (-length..=length / 2.0 + LOOK_AHEAD).contains(&q.x)
@@ -159,7 +159,7 @@ pub fn back_out_turn(points: &[DVec2], length: f64, width: f64) -> Option<f64> {
 /// Only past the rear face: beside the body nothing real lies within its width (it would
 /// touch), but the sides of a narrow way a few centimetres off put range noise there scan
 /// after scan, and counted, it stopped robots backing out of such ways halfway.
-pub fn behind_clear(points: &[DVec2], length: f64, width: f64) -> bool {
+fn behind_clear(points: &[DVec2], length: f64, width: f64) -> bool {
     let (rear, half_width) = (-length / 2.0, width / 2.0 + BODY_MARGIN);
     points
         .iter()
