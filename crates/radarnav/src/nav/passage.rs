@@ -134,7 +134,8 @@ fn back_out_turn(points: &[DVec2], length: f64, width: f64) -> Option<f64> {
     };
     let (left, right) = (side(1.0), side(-1.0));
     let angles: Vec<f64> = [left.0, right.0].into_iter().flatten().collect();
-    if angles.is_empty() && left.1.is_infinite() && right.1.is_infinite() {
+    // A side with a direction has returns, so a nearest one.
+    if left.1.is_infinite() && right.1.is_infinite() {
         return None;
     }
     let angle = if angles.is_empty() {
