@@ -174,3 +174,37 @@ fn bug2_in_clusters_takes_up_the_neighbour_that_blocked_its_crossings() {
         assert!(r.passed(), "{why}");
     }
 }
+
+#[test]
+fn a_robot_stuck_in_a_pocket_between_bushes_drives_back_out_the_way_it_came() {
+    // The laser's follower passed a gap into a pocket between three bushes whose other ways
+    // out are narrower than the body, turned on the spot there until the no-progress
+    // watchdog, and began every standoff retry in the same pocket: `no_path` after 4-6 m on
+    // every seed, both Bugs, both poses. It now retraces the way it came, remembers a dead
+    // end there, and goes round the cluster.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let map = TrialMap::new(Scenario::builtin("nav/bush-pocket").expect("built-in")).expect("bug");
+    let runs: Vec<_> = [
+        (BugAlgorithm::Bug1, PoseSource::Odometry),
+        (BugAlgorithm::Bug2, PoseSource::Truth),
+    ]
+    .par_iter()
+    .map(|&(algorithm, pose)| {
+        let trial = Trial {
+            algorithm,
+            sensor: SensorClass::Laser,
+            pose,
+            seed: 1,
+        };
+        map.run(&trial).expect("the run starts")
+    })
+    .collect();
+    for r in &runs {
+        let why = failures(std::slice::from_ref(r)).join("\n");
+        assert_eq!(r.bumps, 0, "{why}");
+        assert!(r.passed(), "{why}");
+        assert!(r.dead_ends >= 1, "no dead end retraced\n{why}");
+    }
+}

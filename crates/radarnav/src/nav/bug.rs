@@ -53,14 +53,21 @@
 //!   The retries are in the report; the bumpers keep what they remember across them;
 //! * a robot that has not got [`STILL_RADIUS`] from one place in [`STILL_TIME`] (turning on
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
-//!   a corner) has met a `no_path` condition too, and retries with a smaller standoff;
+//!   a corner) first **retraces** the way it came until [`RETRACE`] metres from there
+//!   ([`super::retrace`]), remembers the place as a dead end whose gaps the follower does
+//!   not pass again, and goes on (following the boundary from the trail's point, as far
+//!   followed as it was there). Stuck again within [`DEAD_END_RADIUS`] of a dead end, it
+//!   has met a `no_path` condition, and retries with a smaller standoff (dead ends are
+//!   forgotten: at a smaller standoff the way may be open);
 //! * coming back past the hit point the other way (out of a dead end) closes no loop;
 //! * a turn on the spot with a return inside the body's circumscribed circle first drives
 //!   on to where the turn is clear, if the sensor sees that within 0.5 m (a corner beside
 //!   the body; a 270° laser is blind behind), else backs to where it is clear within 0.3 m,
 //!   else backs off a little where the way behind is seen free and backing takes the body
 //!   away from what it would sweep, else (a way narrower than the turning circle) drives on
-//!   along it, or back, up to 3 m to where it is clear; a turn that bumped backs off 0.15 m;
+//!   along it up to 3 m to where it is clear, or back as far, but no farther than it had
+//!   just come forward along that line ([`Trail::straight_behind`]: behind, a 270° laser is
+//!   blind); a turn that bumped backs off 0.15 m;
 //! * turning about or leaving waits while the follower is committed to a gap
 //!   ([`super::passage::Passage::committed`]: in it, not on the way to it);
 //! * every command then passes the [`super::guard`]: swept along its arc, it must not bring
@@ -71,7 +78,8 @@ use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
 use super::passage::{BACK_SPEED, backing_eases_turn, room_to_turn, turn_clear};
-use super::wall_follow::{Side, WallFollower};
+use super::retrace::{Retrace, RetraceStep, Trail};
+use super::wall_follow::{DEAD_END_RADIUS, Side, WallFollower};
 use super::{Behaviour, nav_pose};
 use crate::map::PoseSource;
 use crate::pose::wrap_angle;
@@ -117,6 +125,9 @@ const STILL_RADIUS: f64 = 0.3;
 /// ... for this long is stuck (turning on the spot between sides nearer than its standoff,
 /// or bumping to and fro in a corner), s: a `no_path` condition.
 const STILL_TIME: f64 = 30.0;
+/// A stuck robot drives the way it came back until it is this far from where it got stuck,
+/// m: out of a pocket entered through a gap, with room to turn and follow on.
+const RETRACE: f64 = 2.0;
 
 /// The smallest safety distance a standoff retry goes down to: the robot's half-diagonal
 /// plus [`MIN_CLEARANCE`], m.
@@ -222,6 +233,8 @@ pub struct BugReport {
     pub safety: f64,
     /// Loops closed while following (back at the hit point, or on the path already followed).
     pub loops: usize,
+    /// Where the robot got stuck and retraced the way it came (believed), m.
+    pub dead_ends: Vec<[f64; 2]>,
 }
 
 /// One standoff retry.
@@ -319,6 +332,44 @@ impl Boundary {
         }
     }
 
+    /// Takes back the last part of the followed path, which went `length` metres into a dead
+    /// end the robot has left again for the followed point nearest `to`: following goes on
+    /// from there as far followed as it was then. What was met in the dead end is forgotten
+    /// (Bug1's closest point, Bug2's crossings), since it cannot be met again. A closed loop
+    /// is left as it is.
+    fn rewind_to(&mut self, to: DVec2, length: f64, goal: DVec2) {
+        if self.circled {
+            return;
+        }
+        let before = self.travelled - length / 2.0;
+        let Some(k) = self
+            .trail
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.2 <= before && (s.0 - to).length() <= 2.0 * TRAIL_STEP)
+            .min_by(|a, b| (a.1.0 - to).length().total_cmp(&(b.1.0 - to).length()))
+            .map(|(k, _)| k)
+        else {
+            return;
+        };
+        self.trail.truncate(k + 1);
+        self.travelled = self.trail[k].2;
+        let t = self.travelled;
+        self.away = self.away.filter(|a| *a <= t);
+        self.leave = self.leave.filter(|l| *l <= t);
+        self.blocked_crossing = self.blocked_crossing.filter(|c| c.2 <= t);
+        if self.closest.2 > t {
+            let from = self.away.unwrap_or(f64::INFINITY);
+            self.closest = self
+                .trail
+                .iter()
+                .filter(|s| s.2 >= from)
+                .map(|s| (s.0, (goal - s.0).length(), s.2))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((self.hit, self.hit_goal_dist, 0.0));
+        }
+    }
+
     /// Whether the robot at `p` heading `yaw` has closed a loop: back within `tol` of the hit
     /// point after having been away, going the way it followed there before, or within `tol`
     /// of its own followed path, going the same way, at least `min_cycle` metres of following
@@ -390,8 +441,17 @@ pub struct BugController {
     backing: f64,
     /// Distance moved (on or back) before the turn now wanted (believed), m, and where from.
     shifted: (f64, Option<DVec2>),
+    /// How far straight back the robot had come forward when the move began, m
+    /// ([`Trail::straight_behind`]).
+    behind: f64,
     /// Whether the retry with the boundary on the other side was made.
     side_retried: bool,
+    /// The last metres driven (believed), for leaving a dead end.
+    trail: Trail,
+    /// Driving the trail back out of a dead end.
+    retrace: Option<Retrace>,
+    /// Dead ends met at this standoff (believed).
+    dead_ends: Vec<DVec2>,
     report: BugReport,
 }
 
@@ -417,9 +477,48 @@ impl BugController {
             turned: false,
             backing: 0.0,
             shifted: (0.0, None),
+            behind: 0.0,
             side_retried: false,
+            trail: Trail::default(),
+            retrace: None,
+            dead_ends: Vec::new(),
             report,
         }
+    }
+
+    /// A follower keeping the boundary on `side`, passing gaps but none near a dead end.
+    fn new_follower(&self, side: Side, vehicle: &VehicleSpec) -> WallFollower {
+        let mut f = WallFollower::new(side, self.mission.speed, TURN_RATE)
+            .passing_gaps(vehicle.length, vehicle.width);
+        for d in &self.dead_ends {
+            f.avoid(*d);
+        }
+        f.engage();
+        f
+    }
+
+    /// Stuck at `p` at `time`: drive back the way the robot came, unless it was stuck near
+    /// here before (the retrace did not help) or no way in is known. Whether it does.
+    fn start_retrace(&mut self, p: DVec2, time: f64) -> bool {
+        if self
+            .dead_ends
+            .iter()
+            .any(|d| (*d - p).length() <= DEAD_END_RADIUS)
+        {
+            return false;
+        }
+        let Some(retrace) = Retrace::along(&mut self.trail, RETRACE, time) else {
+            return false;
+        };
+        self.dead_ends.push(p);
+        self.report.dead_ends.push(p.to_array());
+        self.follower.avoid(p);
+        // The boundary goes on from the trail's far end: the pocket was no part of it.
+        if let Mode::Follow(bd) = &mut self.mode {
+            bd.rewind_to(retrace.end(), retrace.length(), self.mission.goal);
+        }
+        self.retrace = Some(retrace);
+        true
     }
 
     /// What the run did so far.
@@ -458,6 +557,8 @@ impl BugController {
         });
         self.report.safety = next;
         self.bumpers.set_safety(next);
+        self.dead_ends.clear();
+        self.retrace = None;
         self.mode = Mode::ToGoal;
         self.start = Some(p);
         self.last_leave = None;
@@ -506,11 +607,20 @@ impl Behaviour for BugController {
         }
         // A turn on the spot sweeps the body's circumscribed circle: with a corner inside it,
         // move to where it is clear first, then turn: ahead, where the sensor sees, or else
-        // back a little.
+        // back a little. (A retrace turns only where its sweep is free.)
         if self.turned
+            && self.retrace.is_none()
             && let Some(b) = self.bumpers.update(input)
         {
             let v = input.vehicle;
+            // Backing far is blind (a 270° laser sees nothing behind, remembered returns
+            // drift): only as far as the robot had just come forward that way.
+            if self.shifted.1.is_none() {
+                self.behind = self
+                    .trail
+                    .straight_behind(&nav_pose(self.mission.pose, input));
+            }
+            let behind = self.behind;
             let (moved, from) = &mut self.shifted;
             *moved += from.map_or(0.0, |f| (p - f).length());
             *from = Some(p);
@@ -529,7 +639,7 @@ impl Behaviour for BugController {
                     .or_else(|| room(2.0 * BACK_OFF, -1.0))
                     .or(back_off.then_some(-BACK_SPEED))
                     .or_else(|| room(ESCAPE_MAX, 1.0))
-                    .or_else(|| room(ESCAPE_MAX, -1.0));
+                    .or_else(|| room(ESCAPE_MAX.min(behind), -1.0));
                 if let Some(speed) = speed {
                     d = Decision::Drive(DriveCommand::twist(speed, 0.0));
                     self.turned = false;
@@ -603,6 +713,9 @@ impl BugController {
             self.still = Some((p, input.time));
         } else if input.time - since > STILL_TIME {
             self.still = None;
+            if self.start_retrace(p, input.time) {
+                return Decision::Drive(DriveCommand::STOP);
+            }
             let reason = format!("stuck: no progress for {STILL_TIME} s at this standoff");
             return self.no_path(&reason, p, vehicle);
         }
@@ -614,6 +727,25 @@ impl BugController {
             // No scan yet: wait for the bumpers.
             return Decision::Drive(DriveCommand::STOP);
         };
+        if let Some(r) = &mut self.retrace {
+            let step = r.step(
+                &pose,
+                input.time,
+                b.clearance(),
+                vehicle.length,
+                vehicle.width,
+            );
+            match step {
+                RetraceStep::Drive(c) if !bumped => return Decision::Drive(c),
+                _ => {
+                    self.retrace = None;
+                    self.still = None;
+                    self.follower.engage();
+                }
+            }
+        } else {
+            self.trail.record(p);
+        }
         let half_width = vehicle.width / 2.0 + MIN_CLEARANCE;
         // A turn on the spot bumped (a corner inside the body's turning circle): back off a
         // little where the way behind is free, then decide again.
@@ -677,10 +809,7 @@ impl BugController {
                         nearer_than = Some(d);
                     }
                     self.report.hit_points.push(p.to_array());
-                    self.follower =
-                        WallFollower::new(self.mission.follow, self.mission.speed, TURN_RATE)
-                            .passing_gaps(vehicle.length, vehicle.width);
-                    self.follower.engage();
+                    self.follower = self.new_follower(self.mission.follow, vehicle);
                     self.mode = Mode::Follow(Box::new(Boundary {
                         nearer_than,
                         ..Boundary::at_hit(p, goal_dist)
@@ -745,10 +874,7 @@ impl BugController {
                             bd.about_turn -= TURN_RATE * dt;
                             if bd.about_turn <= 0.0 {
                                 let other = self.follower.side().other();
-                                self.follower =
-                                    WallFollower::new(other, self.mission.speed, TURN_RATE)
-                                        .passing_gaps(vehicle.length, vehicle.width);
-                                self.follower.engage();
+                                self.follower = self.new_follower(other, vehicle);
                             }
                             return Decision::Drive(DriveCommand::twist(0.0, -s * TURN_RATE));
                         }

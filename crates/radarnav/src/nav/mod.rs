@@ -6,6 +6,7 @@ pub mod bumper;
 pub mod explore;
 pub mod guard;
 pub mod passage;
+pub mod retrace;
 mod teleop;
 pub mod wall_follow;
 mod waypoints;

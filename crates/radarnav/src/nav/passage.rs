@@ -26,8 +26,9 @@
 //!
 //! A gap can look wider from afar than the way through it is (returns on box corners, range
 //! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
-//! again, and after three tries gives the gap up, backing out to the approach point, where
-//! there is room to turn and follow on. It backs out steered by the sides it sees beside the
+//! again, and after three tries gives the gap up, backing out until the body can turn on the
+//! spot (at most to the approach point), so that the follower goes on where its sensor
+//! sees: backing is blind behind. It backs out steered by the sides it sees beside the
 //! body (`back_out_turn`), not along the line through the gap: that line is held in the
 //! believed frame, and a way leaning off it or the odometry's heading drift bring a flank
 //! onto a side within metres, where a 270° laser is blind. Both ends leave the robot where
@@ -396,8 +397,8 @@ enum Phase {
     /// Past the narrowest pair but still between two sides nearer together than the
     /// follower's circle (the gap is the mouth of a passage: a crate's length, a corridor).
     Through,
-    /// Given up inside the gap: backing out along the line through it to the approach point,
-    /// where there is room to turn and follow on.
+    /// Given up inside the gap (or at a dead end too narrow to turn about in): backing out
+    /// until there is room to turn and follow on, at most to the approach point.
     Retreat,
 }
 
@@ -473,7 +474,7 @@ impl Passage {
         entered && (!self.free_to_turn || self.about > 0.0)
     }
 
-    /// Gives the gap up: back out to the approach point, with a clock of its own.
+    /// Gives the gap up: back out until the body can turn, with a clock of its own.
     fn retreat(&mut self) {
         self.phase = Phase::Retreat;
         self.time = 0.0;
@@ -544,6 +545,12 @@ impl Passage {
             // turning back to face through it there would fight the sides' steer.
             Phase::Retreat if !self.backing_out && toward_normal.abs() > RETREAT_ALIGNED => {
                 (0.0, face)
+            }
+            // Backing goes only as far as it must: once the body can turn on the spot, it
+            // turns and drives on where its sensor sees. Backing 5.8 m out of a winding
+            // way between crates, blind behind, on the odometry, it met a crate's corner.
+            Phase::Retreat if self.backing_out && turn_clear(points, length, width) => {
+                return PassStep::Blocked;
             }
             Phase::Retreat => {
                 self.backing_out = true;
@@ -956,11 +963,21 @@ mod tests {
         assert!(wrap_angle(pose.yaw - FRAC_PI_2).abs() < 0.3, "{pose:?}");
     }
 
-    /// Where the robot following the wall of [`doorway`] stands when it gives a gap up: back
-    /// at the approach point in front of it, facing through it.
+    /// Where the robot following the wall of [`doorway`] stands when it gives a gap up: backed
+    /// out in front of it until it can turn on the spot (the circle its corners sweep clear
+    /// of the door posts), no farther than the approach point, facing through it.
     fn given_up_in_front(pose: &Pose, door: f64) {
         let approach = 0.508 / 2.0 + APPROACH_OFFSET;
-        assert!(pose.y >= -1.0 + approach - 0.05, "{pose:?}");
+        let turn = turn_radius(0.508, 0.497) - BODY_MARGIN;
+        let posts = [DVec2::new(1.0, -1.0), DVec2::new(1.0 + door, -1.0)];
+        assert!(
+            posts.iter().all(|q| q.distance(pose.xy()) > turn),
+            "{pose:?}"
+        );
+        assert!(
+            (-1.0..=-1.0 + approach + 0.05).contains(&pose.y),
+            "{pose:?}"
+        );
         assert!((pose.x - (1.0 + door / 2.0)).abs() < 0.15, "{pose:?}");
         assert!(wrap_angle(pose.yaw + FRAC_PI_2).abs() < 0.3, "{pose:?}");
     }
@@ -969,7 +986,7 @@ mod tests {
     fn a_gap_whose_way_blocks_the_body_is_given_up_from_in_front_of_it() {
         // A doorway seen as a gap (from afar, in noise) that is a niche 0.3 m deep: the way
         // ahead blocks the body in it. The robot backs out and tries again, then gives the
-        // gap up, backing out to the approach point (rather than driving in and out, or
+        // gap up, backing out until it can turn (rather than driving in and out, or
         // turning toward an ever smaller heading error, until the timeout).
         let mut walls = doorway(0.8);
         walls.push((DVec2::new(0.0, -1.3), DVec2::new(3.0, -1.3)));
@@ -1015,6 +1032,10 @@ mod tests {
         assert_eq!(end, PassStep::Blocked);
         assert!(deepest < end_y + 0.7, "went {deepest} m in");
         given_up_in_front(&pose, door);
+        // No farther back than it had to (once, out of a winding way between crates, it
+        // backed 5.8 m blind to the approach point and met a crate's corner).
+        let approach = 0.508 / 2.0 + APPROACH_OFFSET;
+        assert!(pose.y < -1.0 + approach - 0.1, "{pose:?}");
     }
 
     #[test]
@@ -1022,7 +1043,7 @@ mod tests {
         // A way 0.74 m wide (too narrow to turn in) and 3 m long behind the doorway, leaning
         // 4° off the line through the doorway: straight back along that line, the body would
         // come 0.21 m across by the mouth, and its flanks are 0.12 m off the sides. Steered by
-        // the sides it backs out all the way to the approach point without touching them.
+        // the sides it backs out all the way until it can turn, without touching them.
         backs_out_of_a_dead_end(3.0, 4.0);
     }
 

@@ -31,6 +31,8 @@ use crate::vehicle::DriveCommand;
 
 /// How far the follower turns away after a bump, rad (45°).
 pub const BUMP_TURN: f64 = std::f64::consts::FRAC_PI_4;
+/// A gap whose middle lies this near a dead end is not passed ([`WallFollower::avoid`]), m.
+pub const DEAD_END_RADIUS: f64 = 1.5;
 
 /// Which side the wall is kept on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,6 +106,8 @@ struct GapPassing {
     passage: Option<Passage>,
     /// The last gap passed or given up (world middle) and the distance travelled then.
     done: Option<(DVec2, f64)>,
+    /// Dead ends left back along the trail ([`super::retrace`]): no gap near one is passed.
+    dead_ends: Vec<DVec2>,
 }
 
 /// The wall-following behaviour (see the module docs).
@@ -146,8 +150,23 @@ impl WallFollower {
             last: None,
             passage: None,
             done: None,
+            dead_ends: Vec::new(),
         });
         self
+    }
+
+    /// Passes no gap whose middle lies within [`DEAD_END_RADIUS`] of the dead end `at` (world
+    /// frame, believed): the gap led into it. A passage under way near it is dropped.
+    pub fn avoid(&mut self, at: DVec2) {
+        if let Some(g) = &mut self.gaps {
+            if g.passage
+                .as_ref()
+                .is_some_and(|p| (p.gap().mid - at).length() <= DEAD_END_RADIUS)
+            {
+                g.passage = None;
+            }
+            g.dead_ends.push(at);
+        }
     }
 
     /// The side the wall is kept on.
@@ -216,7 +235,11 @@ impl WallFollower {
                     let fresh = g.done.is_none_or(|(mid, at)| {
                         (seen.mid - mid).length() > 1.0 || g.travelled - at > TAU * radius + 2.0
                     });
-                    if fresh {
+                    let dead_end = g
+                        .dead_ends
+                        .iter()
+                        .any(|d| (seen.mid - *d).length() <= DEAD_END_RADIUS);
+                    if fresh && !dead_end {
                         g.passage = Some(Passage::new(seen, 2.0 * radius, self.speed));
                     }
                 }

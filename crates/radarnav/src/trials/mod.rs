@@ -366,6 +366,11 @@ impl TrialMap {
             distance: summary.distance,
             bound,
             attempts: 1 + retries.len(),
+            dead_ends: summary
+                .navigation
+                .as_ref()
+                .and_then(|n| n["dead_ends"].as_array().map(Vec::len))
+                .unwrap_or_default(),
             time: summary.duration,
             faults,
             reason: summary
@@ -412,6 +417,8 @@ pub struct TrialResult {
     pub bound: f64,
     /// Bug runs made: 1 plus the standoff retries and the retry on the other side.
     pub attempts: usize,
+    /// Dead ends the robot got stuck in and drove back out of the way it came.
+    pub dead_ends: usize,
     /// Simulated time, s.
     pub time: f64,
     /// Empty when the run passed.
@@ -456,14 +463,14 @@ impl TrialResult {
 pub fn results_csv(results: &[TrialResult]) -> String {
     use std::fmt::Write;
     let mut csv = String::from(
-        "map,algorithm,sensor,pose,seed,expected,outcome,bumps,distance_m,bound_m,attempts,time_s,passed,faults,reason\n",
+        "map,algorithm,sensor,pose,seed,expected,outcome,bumps,distance_m,bound_m,attempts,dead_ends,time_s,passed,faults,reason\n",
     );
     for r in results {
         let t = &r.trial;
         let faults: Vec<&str> = r.faults.iter().map(|f| f.as_str()).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{:.3},{:.3},{},{:.2},{},{},\"{}\"",
+            "{},{},{},{},{},{},{},{},{:.3},{:.3},{},{},{:.2},{},{},\"{}\"",
             r.map,
             t.algorithm.as_str(),
             t.sensor.as_str(),
@@ -475,6 +482,7 @@ pub fn results_csv(results: &[TrialResult]) -> String {
             r.distance,
             r.bound,
             r.attempts,
+            r.dead_ends,
             r.time,
             r.passed(),
             faults.join("+"),
@@ -597,6 +605,7 @@ mod tests {
             distance: 12.5,
             bound: 10.0,
             attempts: 3,
+            dead_ends: 1,
             time: 40.0,
             faults: vec![Fault::Outcome, Fault::Bumped, Fault::OverBound],
             reason: "said \"no\"".into(),
@@ -606,7 +615,7 @@ mod tests {
         assert_eq!(rows.len(), 2);
         assert_eq!(
             rows[1],
-            "nav/x,bug2,laser,odometry,2,reached,no_path,1,12.500,10.000,3,40.00,false,outcome+bumped+over_bound,\"said 'no'\""
+            "nav/x,bug2,laser,odometry,2,reached,no_path,1,12.500,10.000,3,1,40.00,false,outcome+bumped+over_bound,\"said 'no'\""
         );
         assert_eq!(rows[0].split(',').count(), rows[1].split(',').count());
         assert_eq!(
