@@ -73,11 +73,6 @@ impl Trail {
         }
     }
 
-    /// Length of the path kept, m.
-    pub fn length(&self) -> f64 {
-        self.length
-    }
-
     /// How far straight back from the believed `pose` the robot came forward along its own
     /// trail, m: the trail's newest points within [`ALONG_AXIS`] of the body's axis behind it.
     /// Backing that far goes where the body has just been; a 270° laser sees nothing there.
@@ -245,14 +240,14 @@ mod tests {
     #[test]
     fn the_trail_keeps_its_last_metres_at_its_spacing() {
         let t = trail_of(&[DVec2::ZERO, DVec2::new(10.0, 0.0)]);
-        assert!((KEEP - 0.2..=KEEP).contains(&t.length()), "{}", t.length());
+        assert!((KEEP - 0.2..=KEEP).contains(&t.length), "{}", t.length);
         let direct: f64 = t
             .points
             .iter()
             .zip(t.points.iter().skip(1))
             .map(|(a, b)| (*b - *a).length())
             .sum();
-        assert!((direct - t.length()).abs() < 1e-9);
+        assert!((direct - t.length).abs() < 1e-9);
         let last = *t.points.back().unwrap();
         assert!((last.x - 10.0).abs() < SPACING + 1e-9, "{last}");
     }
@@ -278,11 +273,7 @@ mod tests {
         let mut t = trail_of(&[DVec2::ZERO, DVec2::new(3.0, 0.0)]);
         let r = Retrace::along(&mut t, 2.0, 0.0).unwrap();
         assert!((r.end().x - (3.0 - r.length())).abs() < 0.12, "{}", r.end());
-        assert!(
-            (t.length() + r.length() - 3.0).abs() < 0.12,
-            "{}",
-            t.length()
-        );
+        assert!((t.length + r.length() - 3.0).abs() < 0.12, "{}", t.length);
         assert_eq!(*t.points.back().unwrap(), r.end());
         // Too little trail left for another stretch that long.
         assert!(Retrace::along(&mut t, 2.5, 0.0).is_none());
