@@ -53,13 +53,18 @@
 //!   The retries are in the report; the bumpers keep what they remember across them;
 //! * a robot that has not got [`STILL_RADIUS`] from one place in [`STILL_TIME`] (turning on
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
-//!   a corner) first **retraces** the way it came until [`RETRACE`] metres from there
-//!   ([`super::retrace`]), remembers the place as a dead end whose gaps the follower does
+//!   a corner) first **retraces** the way it came until [`RETRACE`] metres from there and
+//!   free to turn on the spot ([`super::retrace`]; the way it came has its loops and
+//!   there-and-back detours taken out), remembers the place as a dead end whose gaps the follower does
 //!   not pass again, and goes on (following the boundary from the trail's point, as far
 //!   followed as it was there). Stuck again within [`DEAD_END_RADIUS`] of a dead end, it
 //!   has met a `no_path` condition, and retries with a smaller standoff (dead ends are
 //!   forgotten: at a smaller standoff the way may be open);
 //! * coming back past the hit point the other way (out of a dead end) closes no loop;
+//! * Bug2 leaves the boundary for a **goal in sight** ([`GOAL_SIGHT`]): nearer than its hit
+//!   point, ahead of the body's side, the body's corridor to it free. Driving straight there
+//!   meets nothing, so its progress holds off the m-line too (as in VisBug); a follower that
+//!   took up a room wall passes goals beyond the m-line's end and crosses it nearer never;
 //! * a turn on the spot with a return inside the body's circumscribed circle first drives
 //!   on to where the turn is clear, if the sensor sees that within 0.5 m (a corner beside
 //!   the body; a 270° laser is blind behind), else backs to where it is clear within 0.3 m,
@@ -125,8 +130,13 @@ const STILL_RADIUS: f64 = 0.3;
 /// ... for this long is stuck (turning on the spot between sides nearer than its standoff,
 /// or bumping to and fro in a corner), s: a `no_path` condition.
 const STILL_TIME: f64 = 30.0;
-/// A stuck robot drives the way it came back until it is this far from where it got stuck,
-/// m: out of a pocket entered through a gap, with room to turn and follow on.
+/// Bug2 leaves the boundary for a goal in sight this near (nearer than its hit point, with
+/// the body's corridor to it free), m: a few times the bumpers' reach, well inside either
+/// sensor's range and resolution.
+const GOAL_SIGHT: f64 = 3.0;
+/// A stuck robot drives the way it came back until it is this far from where it got stuck
+/// (and on until it can turn on the spot), m: out of a pocket entered through a gap, with
+/// room to turn and follow on.
 const RETRACE: f64 = 2.0;
 
 /// The smallest safety distance a standoff retry goes down to: the robot's half-diagonal
@@ -452,6 +462,9 @@ pub struct BugController {
     retrace: Option<Retrace>,
     /// Dead ends met at this standoff (believed).
     dead_ends: Vec<DVec2>,
+    /// Bug2 left the boundary for the goal in sight: it is approached while the body's
+    /// corridor to it stays free, whatever the bumpers beside the corridor say.
+    sighted: bool,
     report: BugReport,
 }
 
@@ -482,6 +495,7 @@ impl BugController {
             trail: Trail::default(),
             retrace: None,
             dead_ends: Vec::new(),
+            sighted: false,
             report,
         }
     }
@@ -507,16 +521,12 @@ impl BugController {
         {
             return false;
         }
-        let Some(retrace) = Retrace::along(&mut self.trail, RETRACE, time) else {
+        let Some(retrace) = Retrace::along(&self.trail, RETRACE, time) else {
             return false;
         };
         self.dead_ends.push(p);
         self.report.dead_ends.push(p.to_array());
         self.follower.avoid(p);
-        // The boundary goes on from the trail's far end: the pocket was no part of it.
-        if let Mode::Follow(bd) = &mut self.mode {
-            bd.rewind_to(retrace.end(), retrace.length(), self.mission.goal);
-        }
         self.retrace = Some(retrace);
         true
     }
@@ -559,6 +569,7 @@ impl BugController {
         self.bumpers.set_safety(next);
         self.dead_ends.clear();
         self.retrace = None;
+        self.sighted = false;
         self.mode = Mode::ToGoal;
         self.start = Some(p);
         self.last_leave = None;
@@ -735,9 +746,14 @@ impl BugController {
                 vehicle.length,
                 vehicle.width,
             );
+            self.trail.record(p);
             match step {
                 RetraceStep::Drive(c) if !bumped => return Decision::Drive(c),
                 _ => {
+                    // The boundary goes on from here: the pocket was no part of it.
+                    if let Mode::Follow(bd) = &mut self.mode {
+                        bd.rewind_to(p, r.driven(), goal);
+                    }
                     self.retrace = None;
                     self.still = None;
                     self.follower.engage();
@@ -761,7 +777,8 @@ impl BugController {
         }
         // A goal inside the standoff of an obstacle beyond it: the bumpers trip before the
         // goal is reached, but the body's corridor to the goal (and a margin past it) is free.
-        let final_approach = goal_dist <= reach + vehicle.length
+        // So for a goal in sight that Bug2 left the boundary for.
+        let final_approach = (goal_dist <= reach + vehicle.length || self.sighted)
             && heading.abs() <= TURN_IN_PLACE
             && b.corridor_free(
                 heading,
@@ -809,6 +826,7 @@ impl BugController {
                         nearer_than = Some(d);
                     }
                     self.report.hit_points.push(p.to_array());
+                    self.sighted = false;
                     self.follower = self.new_follower(self.mission.follow, vehicle);
                     self.mode = Mode::Follow(Box::new(Boundary {
                         nearer_than,
@@ -958,6 +976,26 @@ impl BugController {
                         // of the next obstacle in the body's corridor), a little farther
                         // along the boundary it may be open: the leave waits for the loop
                         // tolerance.
+                        // The goal in sight, nearer than the hit point, the body's corridor to it
+                        // (and a margin past it) free: driving straight there reaches it and
+                        // meets nothing, so Bug2's progress holds off the m-line too (as in
+                        // VisBug). Only where the sensor looks (a 270° laser is blind
+                        // behind) and within `GOAL_SIGHT`. A follower that took up the room
+                        // wall passes such goals and never crosses the m-line nearer.
+                        let in_sight = goal_dist <= GOAL_SIGHT
+                            && heading.abs() <= std::f64::consts::FRAC_PI_2
+                            && goal_dist < bd.hit_goal_dist - CLOSER_BY / 2.0
+                            && b.corridor_free(
+                                heading,
+                                goal_dist + vehicle.length / 2.0 + MIN_CLEARANCE,
+                                half_width,
+                            );
+                        if in_sight && !passing {
+                            self.report.leave_points.push(p.to_array());
+                            self.sighted = true;
+                            self.mode = Mode::ToGoal;
+                            return Decision::Drive(DriveCommand::STOP);
+                        }
                         if let Some(at) = bd.leave
                             && !passing
                         {

@@ -7,11 +7,15 @@
 //! and a retry with a smaller standoff starts in the same pocket.
 //!
 //! The way in is known to be passable: the robot drove it. [`Trail`] keeps the last metres
-//! of the believed path, and [`Retrace`] drives a stretch of it back. The robot goes forward
-//! where the next point of the trail lies ahead and backs where it lies behind, so a body
-//! that cannot turn in a narrow way reverses out along the path it came in on. Held in the
-//! believed frame, the trail is as good as the odometry over a few metres. Every command
-//! still passes the bumpers' sweep check ([`super::guard::sweep_touches`]).
+//! of the believed path with its loops taken out: where the robot comes back near where it
+//! was (it backed out of a narrow way, or went round something), the path since is cut. So
+//! the trail is the way in to where the robot stands, not a detour it already came back
+//! from. [`Retrace`] drives the trail back until the robot is far enough from the dead end
+//! *and* can turn on the spot. The robot goes forward where the next point of the trail lies
+//! ahead and backs where it lies behind, so a body that cannot turn in a narrow way reverses
+//! out along the path it came in on, all the way out. Held in the believed frame, the trail
+//! is as good as the odometry over a few metres. Every command still passes the bumpers'
+//! sweep check ([`super::guard::sweep_touches`]).
 //!
 //! The controller remembers the place as a dead end. Its follower passes no gap near it
 //! again (see [`super::wall_follow::WallFollower::avoid`]).
@@ -22,7 +26,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use glam::DVec2;
 
 use super::guard::sweep_touches;
-use super::passage::BACK_SPEED;
+use super::passage::{BACK_SPEED, turn_clear};
 use crate::pose::{Pose, wrap_angle};
 use crate::vehicle::{DriveCommand, Twist};
 
@@ -30,6 +34,8 @@ use crate::vehicle::{DriveCommand, Twist};
 const SPACING: f64 = 0.1;
 /// Path kept in the trail, m: more than one retrace takes.
 const KEEP: f64 = 6.0;
+/// Back this near an older sample of the trail, the path since is a loop, m.
+const RETURNED: f64 = 1.5 * SPACING;
 /// A trail point nearer than this is passed; the next one is steered for, m.
 const LOOK: f64 = 0.3;
 /// Speed driving forward along the trail, m/s.
@@ -45,31 +51,48 @@ const TIMEOUT: f64 = 90.0;
 /// Trail points this near the body's axis lie straight behind it, m.
 const ALONG_AXIS: f64 = 0.1;
 
-/// The last few metres of the believed path.
+/// The way the robot came: the last few metres of the believed path with its loops taken
+/// out. A robot that backs out of a narrow way, or goes round and comes back to where it
+/// was, took a detour that is no way out of where it stands now.
 #[derive(Clone, Debug, Default)]
 pub struct Trail {
-    points: VecDeque<DVec2>,
-    /// Length of the path through `points`, m.
-    length: f64,
+    /// Samples, oldest first, each with the distance driven to it (along the kept path), m.
+    points: VecDeque<(DVec2, f64)>,
 }
 
 impl Trail {
     /// Adds the robot's believed position `p`, if it is far enough from the last sample.
+    /// Back near an older sample, the trail is cut back to it.
     pub fn record(&mut self, p: DVec2) {
-        if self
-            .points
-            .back()
-            .is_some_and(|l| (p - *l).length() < SPACING)
-        {
+        let Some(&(last, driven)) = self.points.back() else {
+            self.points.push_back((p, 0.0));
+            return;
+        };
+        if (p - last).length() < SPACING {
             return;
         }
-        self.length += self.points.back().map_or(0.0, |l| (p - *l).length());
-        self.points.push_back(p);
-        while self.length > KEEP
-            && let (Some(a), Some(b)) = (self.points.front(), self.points.get(1))
+        let driven = driven + (p - last).length();
+        // The newest samples lie near `p` on any path: only a return from farther along
+        // than a there-and-back across the radius closes a loop.
+        if let Some(k) = self
+            .points
+            .iter()
+            .position(|(q, d)| (p - *q).length() < RETURNED && driven - d > 2.0 * RETURNED)
         {
-            self.length -= (*b - *a).length();
+            self.points.truncate(k + 1);
+            return;
+        }
+        self.points.push_back((p, driven));
+        while self.length() > KEEP && self.points.len() > 2 {
             self.points.pop_front();
+        }
+    }
+
+    /// Length of the path the trail keeps, m.
+    fn length(&self) -> f64 {
+        match (self.points.front(), self.points.back()) {
+            (Some(a), Some(b)) => b.1 - a.1,
+            _ => 0.0,
         }
     }
 
@@ -79,7 +102,7 @@ impl Trail {
     pub fn straight_behind(&self, pose: &Pose) -> f64 {
         let to_body = pose.inverse();
         let mut behind: f64 = 0.0;
-        for q in self.points.iter().rev() {
+        for (q, _) in self.points.iter().rev() {
             let r = to_body.compose(&Pose::new(q.x, q.y, 0.0, 0.0)).xy();
             if r.x > ALONG_AXIS || r.y.abs() > ALONG_AXIS {
                 break;
@@ -88,27 +111,6 @@ impl Trail {
         }
         behind
     }
-
-    /// Takes the trail off it back to the first point `away` metres from its newest one
-    /// (all of it when none is), newest first: the way back. Counted in straight line, not
-    /// along the trail: shuffling to and fro where the robot got stuck lays down trail
-    /// without getting anywhere.
-    fn take_back(&mut self, away: f64) -> Vec<DVec2> {
-        let mut back: Vec<DVec2> = Vec::new();
-        while let Some(q) = self.points.pop_back() {
-            self.length -= back.last().map_or(0.0, |l| (q - *l).length());
-            back.push(q);
-            if (q - back[0]).length() >= away {
-                // The last point taken is where the trail goes on from next time.
-                self.points.push_back(q);
-                break;
-            }
-        }
-        if self.points.len() < 2 {
-            self.length = 0.0;
-        }
-        back
-    }
 }
 
 /// What one step of a [`Retrace`] gives.
@@ -116,51 +118,53 @@ impl Trail {
 pub enum RetraceStep {
     /// Drive this.
     Drive(DriveCommand),
-    /// Back at the far end of the stretch.
+    /// Far enough back, with room to turn (or at the trail's oldest point).
     Done,
     /// No free move along it (or out of time).
     Blocked,
 }
 
-/// Driving a stretch of the trail back (module docs).
+/// Driving the trail back (module docs).
 #[derive(Clone, Debug)]
 pub struct Retrace {
-    /// The way back, newest first: from where the robot stands to the stretch's far end.
+    /// The way back, newest first: from where the robot stood to the trail's oldest point.
     path: Vec<DVec2>,
     /// Index of the point steered for.
     next: usize,
+    /// Straight-line distance from `path[0]` to go at least, m.
+    away: f64,
     /// When the retrace started, s.
     since: f64,
+    /// Distance driven (believed), m, and the last position it was counted from.
+    driven: (f64, Option<DVec2>),
 }
 
 impl Retrace {
-    /// A retrace of `trail` (taken off it) back to where it was `away` metres from where
-    /// the robot is, started at `time`: `None` when no point of the trail lies half that
-    /// far (no way in is known).
-    pub fn along(trail: &mut Trail, away: f64, time: f64) -> Option<Self> {
-        let newest = *trail.points.back()?;
+    /// A retrace of `trail` that goes back until at least `away` metres (straight line)
+    /// from where the robot is and then on until the body can turn on the spot, started at
+    /// `time`: `None` when no point of the trail lies half that far (no way in is known).
+    /// The trail itself takes the way back as the robot drives it: its loops close.
+    pub fn along(trail: &Trail, away: f64, time: f64) -> Option<Self> {
+        let newest = trail.points.back()?.0;
         if trail
             .points
             .iter()
-            .all(|q| (*q - newest).length() < away / 2.0)
+            .all(|(q, _)| (*q - newest).length() < away / 2.0)
         {
             return None;
         }
         Some(Self {
-            path: trail.take_back(away),
+            path: trail.points.iter().rev().map(|(q, _)| *q).collect(),
             next: 0,
+            away,
             since: time,
+            driven: (0.0, None),
         })
     }
 
-    /// Where the retrace ends (believed frame).
-    pub fn end(&self) -> DVec2 {
-        self.path.last().copied().unwrap_or_default()
-    }
-
-    /// Length of the way back, m.
-    pub fn length(&self) -> f64 {
-        self.path.windows(2).map(|w| (w[1] - w[0]).length()).sum()
+    /// How far the robot has driven back so far (believed), m.
+    pub fn driven(&self) -> f64 {
+        self.driven.0
     }
 
     /// The move for a robot at the believed `pose` at `time`, with the robot-frame returns
@@ -177,6 +181,14 @@ impl Retrace {
             return RetraceStep::Blocked;
         }
         let p = pose.xy();
+        let (driven, from) = &mut self.driven;
+        *driven += from.map_or(0.0, |f| (p - f).length());
+        *from = Some(p);
+        // Far enough from the dead end and free to turn: the follower takes over. A narrow
+        // way goes on being backed out of; the follower would only turn into its sides.
+        if (p - self.path[0]).length() >= self.away && turn_clear(points, length, width) {
+            return RetraceStep::Done;
+        }
         // Points passed are dropped; so are the ones where the robot stood turning.
         while self
             .path
@@ -237,46 +249,64 @@ mod tests {
         t
     }
 
+    fn xs(t: &Trail) -> Vec<DVec2> {
+        t.points.iter().map(|(q, _)| *q).collect()
+    }
+
     #[test]
     fn the_trail_keeps_its_last_metres_at_its_spacing() {
         let t = trail_of(&[DVec2::ZERO, DVec2::new(10.0, 0.0)]);
-        assert!((KEEP - 0.2..=KEEP).contains(&t.length), "{}", t.length);
-        let direct: f64 = t
-            .points
-            .iter()
-            .zip(t.points.iter().skip(1))
-            .map(|(a, b)| (*b - *a).length())
-            .sum();
-        assert!((direct - t.length).abs() < 1e-9);
-        let last = *t.points.back().unwrap();
+        assert!((KEEP - 0.2..=KEEP).contains(&t.length()), "{}", t.length());
+        let direct: f64 = xs(&t).windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        assert!((direct - t.length()).abs() < 1e-9);
+        let last = *xs(&t).last().unwrap();
         assert!((last.x - 10.0).abs() < SPACING + 1e-9, "{last}");
     }
 
     #[test]
-    fn taking_back_a_stretch_leaves_its_far_end_on_the_trail() {
-        let mut t = trail_of(&[DVec2::ZERO, DVec2::new(3.0, 0.0)]);
-        let r = Retrace::along(&mut t, 2.0, 0.0).unwrap();
-        // Whole samples: up to one spacing (0.1 m, plus the rounding of the walk) over.
-        assert!((2.0..2.0 + 0.12).contains(&r.length()), "{}", r.length());
-        // Shuffling to and fro at the end lays down trail but gets nowhere: the way back
-        // still goes as far from where the robot stands.
-        let mut t = trail_of(&[
+    fn a_way_driven_back_or_round_to_where_the_robot_was_leaves_the_trail() {
+        // In 3 m along x, backed 2 m: the trail ends a metre in.
+        let t = trail_of(&[DVec2::ZERO, DVec2::new(3.0, 0.0), DVec2::new(1.0, 0.03)]);
+        let last = *xs(&t).last().unwrap();
+        assert!((last.x - 1.0).abs() < 0.16, "{last}");
+        assert!((t.length() - 1.0).abs() < 0.16, "{}", t.length());
+        // Round a square and back near its corner: the loop goes.
+        let t = trail_of(&[
+            DVec2::new(-1.0, 0.0),
             DVec2::ZERO,
-            DVec2::new(3.0, 0.0),
-            DVec2::new(2.5, 0.0),
-            DVec2::new(3.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(0.0, 1.0),
+            DVec2::new(0.05, 0.0),
         ]);
-        let newest = *t.points.back().unwrap();
-        let r = Retrace::along(&mut t, 2.0, 0.0).unwrap();
-        let away = newest.x - r.end().x;
-        assert!((2.0..2.12).contains(&away), "{newest} {}", r.end());
-        let mut t = trail_of(&[DVec2::ZERO, DVec2::new(3.0, 0.0)]);
-        let r = Retrace::along(&mut t, 2.0, 0.0).unwrap();
-        assert!((r.end().x - (3.0 - r.length())).abs() < 0.12, "{}", r.end());
-        assert!((t.length + r.length() - 3.0).abs() < 0.12, "{}", t.length);
-        assert_eq!(*t.points.back().unwrap(), r.end());
-        // Too little trail left for another stretch that long.
-        assert!(Retrace::along(&mut t, 2.5, 0.0).is_none());
+        assert!(
+            xs(&t).iter().all(|q| q.x <= 0.1 && q.y <= 0.1),
+            "{:?}",
+            xs(&t)
+        );
+        // A tight turn keeps its samples: they are near each other only along the path.
+        let arc: Vec<DVec2> = (0..=16)
+            .map(|k| DVec2::from_angle(k as f64 * PI / 16.0) * 0.2)
+            .collect();
+        let t = trail_of(&arc);
+        assert!(t.length() > 0.5, "{}", t.length());
+    }
+
+    #[test]
+    fn a_retrace_after_backing_out_of_a_narrow_way_goes_back_the_way_in() {
+        // In along x to the mouth of a way north, up it 3 m, and backed out again.
+        let t = trail_of(&[
+            DVec2::new(-3.0, 0.0),
+            DVec2::ZERO,
+            DVec2::new(0.0, 3.0),
+            DVec2::new(0.02, 0.2),
+        ]);
+        let r = Retrace::along(&t, 2.0, 0.0).unwrap();
+        assert!(r.path.iter().all(|q| q.y < 0.3), "{:?}", r.path);
+        assert!(r.path.last().unwrap().x < -2.5, "{:?}", r.path);
+        // Too little trail for a way back that long.
+        let t = trail_of(&[DVec2::ZERO, DVec2::new(0.8, 0.0)]);
+        assert!(Retrace::along(&t, 2.0, 0.0).is_none());
     }
 
     #[test]
@@ -332,16 +362,26 @@ mod tests {
         let mut world = side(DVec2::new(0.0, 0.325), DVec2::new(3.0, 0.325));
         world.extend(side(DVec2::new(0.0, -0.325), DVec2::new(3.0, -0.325)));
         world.extend(side(DVec2::new(3.0, -0.325), DVec2::new(3.0, 0.325)));
-        let mut t = trail_of(&[
+        let t = trail_of(&[
             DVec2::new(-1.5, -1.5),
             DVec2::new(-0.8, 0.0),
             DVec2::new(2.5, 0.0),
         ]);
-        let mut r = Retrace::along(&mut t, 3.5, 0.0).unwrap();
+        // Asked to go 1 m back: it goes on until the body is out of the way and can turn.
+        let mut r = Retrace::along(&t, 1.0, 0.0).unwrap();
         let (end, poses) = drive(&mut r, Pose::new(2.5, 0.0, 0.0, 0.0), &world);
         assert_eq!(end, RetraceStep::Done);
         let last = poses.last().unwrap();
-        assert!((last.xy() - r.end()).length() < LOOK + 0.05, "{last:?}");
+        assert!((-0.5..0.0).contains(&last.x), "{last:?}");
+        let driven: f64 = poses
+            .windows(2)
+            .map(|w| w[0].xy().distance(w[1].xy()))
+            .sum();
+        assert!(
+            (r.driven() - driven).abs() < 0.05,
+            "{} {driven}",
+            r.driven()
+        );
         // Backing all the way: the body never turned inside the way.
         for q in &poses {
             if q.x > 0.3 {
@@ -352,10 +392,13 @@ mod tests {
 
     #[test]
     fn a_robot_with_room_to_turn_drives_its_trail_back_forward() {
-        let mut t = trail_of(&[DVec2::ZERO, DVec2::new(2.0, 0.0)]);
-        let mut r = Retrace::along(&mut t, 1.5, 0.0).unwrap();
+        let t = trail_of(&[DVec2::ZERO, DVec2::new(2.0, 0.0)]);
+        let mut r = Retrace::along(&t, 1.5, 0.0).unwrap();
         let (end, poses) = drive(&mut r, Pose::new(2.0, 0.0, 0.0, PI), &[]);
         assert_eq!(end, RetraceStep::Done);
+        // With room to turn, it ends as soon as it is far enough.
+        let last = poses.last().unwrap();
+        assert!((0.35..=0.5).contains(&last.x), "{last:?}");
         assert!(poses.iter().all(|q| q.yaw.abs() > 3.0));
         assert!(poses.windows(2).all(|w| w[1].x <= w[0].x + 1e-9));
     }
@@ -363,8 +406,8 @@ mod tests {
     #[test]
     fn a_wall_across_the_way_back_blocks_the_retrace() {
         let world = side(DVec2::new(0.8, -1.0), DVec2::new(0.8, 1.0));
-        let mut t = trail_of(&[DVec2::ZERO, DVec2::new(2.0, 0.0)]);
-        let mut r = Retrace::along(&mut t, 2.0, 0.0).unwrap();
+        let t = trail_of(&[DVec2::ZERO, DVec2::new(2.0, 0.0)]);
+        let mut r = Retrace::along(&t, 2.0, 0.0).unwrap();
         let (end, poses) = drive(&mut r, Pose::new(2.0, 0.0, 0.0, 0.0), &world);
         assert_eq!(end, RetraceStep::Blocked);
         let last = poses.last().unwrap();

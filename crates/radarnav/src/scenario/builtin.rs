@@ -93,6 +93,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/crates-dense.toml"),
     ),
     (
+        "nav/crates-room",
+        include_str!("../../../../scenarios/nav/crates-room.toml"),
+    ),
+    (
         "nav/crates-tight",
         include_str!("../../../../scenarios/nav/crates-tight.toml"),
     ),
@@ -191,6 +195,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
     (
         "nav/wall-field",
         include_str!("../../../../scenarios/nav/wall-field.toml"),
+    ),
+    (
+        "nav/wall-slot",
+        include_str!("../../../../scenarios/nav/wall-slot.toml"),
     ),
 ];
 
