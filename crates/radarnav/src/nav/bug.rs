@@ -55,16 +55,16 @@
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
 //!   a corner) first **retraces** the way it came until [`RETRACE`] metres from there and
 //!   free to turn on the spot ([`super::retrace`]; the way it came has its loops and
-//!   there-and-back detours taken out), remembers the place as a dead end whose gaps the follower does
-//!   not pass again, and goes on (following the boundary from the trail's point, as far
-//!   followed as it was there). Stuck again within [`DEAD_END_RADIUS`] of a dead end, it
-//!   has met a `no_path` condition, and retries with a smaller standoff (dead ends are
-//!   forgotten: at a smaller standoff the way may be open);
+//!   there-and-back detours taken out), remembers the place as a dead end whose gaps the
+//!   follower does not pass again, and goes on (following the boundary from the point it
+//!   retraced to, as far followed as it was there). Stuck again within
+//!   [`DEAD_END_RADIUS`] of a dead end, it has met a `no_path` condition, and retries with a
+//!   smaller standoff (dead ends are forgotten: at a smaller standoff the way may be open);
 //! * coming back past the hit point the other way (out of a dead end) closes no loop;
 //! * Bug2 leaves the boundary for a **goal in sight** ([`GOAL_SIGHT`]): nearer than its hit
 //!   point, ahead of the body's side, the body's corridor to it free. Driving straight there
 //!   meets nothing, so its progress holds off the m-line too (as in VisBug); a follower that
-//!   took up a room wall passes goals beyond the m-line's end and crosses it nearer never;
+//!   took up a room wall passes goals beyond the m-line's end and never crosses it nearer;
 //! * a turn on the spot with a return inside the body's circumscribed circle first drives
 //!   on to where the turn is clear, if the sensor sees that within 0.5 m (a corner beside
 //!   the body; a 270° laser is blind behind), else backs to where it is clear within 0.3 m,
@@ -972,12 +972,8 @@ impl BugController {
                         {
                             bd.blocked_crossing = Some((p, goal_dist, bd.travelled));
                         }
-                        // Where the way toward the goal is blocked at the crossing (a corner
-                        // of the next obstacle in the body's corridor), a little farther
-                        // along the boundary it may be open: the leave waits for the loop
-                        // tolerance.
-                        // The goal in sight, nearer than the hit point, the body's corridor to it
-                        // (and a margin past it) free: driving straight there reaches it and
+                        // The goal in sight, nearer than the hit point, the body's corridor to
+                        // it (and a margin past it) free: driving straight there reaches it and
                         // meets nothing, so Bug2's progress holds off the m-line too (as in
                         // VisBug). Only where the sensor looks (a 270° laser is blind
                         // behind) and within `GOAL_SIGHT`. A follower that took up the room
@@ -996,6 +992,10 @@ impl BugController {
                             self.mode = Mode::ToGoal;
                             return Decision::Drive(DriveCommand::STOP);
                         }
+                        // Where the way toward the goal is blocked at the crossing (a corner
+                        // of the next obstacle in the body's corridor), a little farther
+                        // along the boundary it may be open: the leave waits for the loop
+                        // tolerance.
                         if let Some(at) = bd.leave
                             && !passing
                         {
