@@ -778,13 +778,16 @@ impl BugController {
         // A goal inside the standoff of an obstacle beyond it: the bumpers trip before the
         // goal is reached, but the body's corridor to the goal (and a margin past it) is free.
         // So for a goal in sight that Bug2 left the boundary for.
-        let final_approach = (goal_dist <= reach + vehicle.length || self.sighted)
-            && heading.abs() <= TURN_IN_PLACE
-            && b.corridor_free(
+        let way_to_goal_free = || {
+            b.corridor_free(
                 heading,
                 goal_dist + vehicle.length / 2.0 + MIN_CLEARANCE,
                 half_width,
-            );
+            )
+        };
+        let final_approach = (goal_dist <= reach + vehicle.length || self.sighted)
+            && heading.abs() <= TURN_IN_PLACE
+            && way_to_goal_free();
         if final_approach && !bumped {
             if let Mode::Follow(_) = self.mode {
                 self.report.leave_points.push(p.to_array());
@@ -981,11 +984,7 @@ impl BugController {
                         let in_sight = goal_dist <= GOAL_SIGHT
                             && heading.abs() <= std::f64::consts::FRAC_PI_2
                             && goal_dist < bd.hit_goal_dist - CLOSER_BY / 2.0
-                            && b.corridor_free(
-                                heading,
-                                goal_dist + vehicle.length / 2.0 + MIN_CLEARANCE,
-                                half_width,
-                            );
+                            && way_to_goal_free();
                         if in_sight && !passing {
                             self.report.leave_points.push(p.to_array());
                             self.sighted = true;
