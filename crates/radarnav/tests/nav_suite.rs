@@ -228,6 +228,31 @@ fn bug2_following_the_room_wall_leaves_it_for_the_goal_in_sight() {
     assert_clean(&runs);
 }
 
+#[test]
+fn a_way_through_a_bush_band_that_turns_along_the_wall_is_followed_round_its_corner() {
+    // The band's only way through turns 90 degrees where it meets the south wall. The laser's
+    // follower passed its first gap, met the wall ahead at the turn, took it for a dead end
+    // and turned about: the band and the room wall became one boundary, at every standoff
+    // (Bug2 back at its hit point on seed 1, Bug1 its closest point blocked on seed 2).
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
+    let runs: Vec<_> = [(BugAlgorithm::Bug2, 1), (BugAlgorithm::Bug1, 2)]
+        .par_iter()
+        .map(|&(algorithm, seed)| {
+            let trial = Trial {
+                algorithm,
+                sensor: SensorClass::Laser,
+                pose: PoseSource::Truth,
+                seed,
+            };
+            map.run(&trial).expect("the run starts")
+        })
+        .collect();
+    assert_clean(&runs);
+}
+
 /// Runs the laser, seed 1, in each (algorithm, pose) of `configs` on the built-in trial map
 /// `name`: each passes without a bump, having retraced at least one dead end.
 fn assert_retraced_clean(

@@ -22,7 +22,9 @@
 //! wall, a corridor): beyond the gap the robot drives on centred between them while they are
 //! nearer together than twice the follow radius, turns about on the spot at a dead end and
 //! comes back out the same way (which is how the boundary goes on), and hands back to the
-//! follower where the way widens. A dead end with no room to turn about is backed out of.
+//! follower where the way widens, or where it ends ahead but turns off to one side (an L
+//! between a hedge's end and a room wall: the follower takes the corner, keeping its side).
+//! A dead end with no room to turn about is backed out of.
 //!
 //! A gap can look wider from afar than the way through it is (returns on box corners, range
 //! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
@@ -207,6 +209,34 @@ pub fn backing_eases_turn(points: &[DVec2], length: f64, width: f64) -> bool {
             (n.min(q.length()), t.min(q.distance(back)))
         });
     then >= now
+}
+
+/// Bearings off the body's axis at which a way beyond a gap may turn off, rad (35° to 110°,
+/// either side): not ahead, where it ends, nor behind, where it came from.
+const TURN_OFF: (f64, f64) = (0.6, 1.9);
+/// Steps in which [`way_turns_off`] tries bearings, rad (about 3°).
+const TURN_OFF_STEP: f64 = 0.05;
+
+/// Whether, among the robot-frame returns `points`, a body of `length` × `width` m that can
+/// turn on the spot has a way off to one side: a strip as wide as the body (with
+/// [`BODY_MARGIN`]) from its centre out past the front face plus a body length, at a
+/// bearing in [`TURN_OFF`], holding fewer than [`HITS_TO_BLOCK`] returns. The sides of a
+/// narrow dead end block every such strip; the open arm of an L does not.
+fn way_turns_off(points: &[DVec2], length: f64, width: f64) -> bool {
+    let half = width / 2.0 + BODY_MARGIN;
+    let reach = 1.5 * length + LOOK_AHEAD;
+    let steps = ((TURN_OFF.1 - TURN_OFF.0) / TURN_OFF_STEP).round() as usize;
+    (0..=steps)
+        .map(|k| TURN_OFF.0 + k as f64 * TURN_OFF_STEP)
+        .flat_map(|b| [b, -b])
+        .any(|b| {
+            let u = DVec2::from_angle(b);
+            points
+                .iter()
+                .filter(|q| (0.0..=reach).contains(&q.dot(u)) && u.perp_dot(**q).abs() <= half)
+                .count()
+                < HITS_TO_BLOCK
+        })
 }
 
 /// Steps in which [`room_to_turn`] tries moves, m.
@@ -641,6 +671,18 @@ impl Passage {
         }
         self.free_to_turn =
             self.phase == Phase::Through && self.through >= self.narrow && turn_clear;
+        // The way ends ahead but turns off beside it (an L between a hedge and a wall): no
+        // dead end. The follower goes on round the corner, keeping its side; a turn about
+        // here would shut the way off.
+        if self.phase == Phase::Through
+            && self.about <= 0.0
+            && v > 0.0
+            && !ahead_clear
+            && turn_clear
+            && way_turns_off(points, length, width)
+        {
+            return PassStep::Done;
+        }
         // A dead end between the sides: turn about on the spot and go back out between
         // them, which is how the boundary goes on (round the end, along the other side).
         if self.phase == Phase::Through && (self.about > 0.0 || v > 0.0 && !ahead_clear) {
@@ -961,6 +1003,30 @@ mod tests {
         let pose = drive_through(&walls, Pose::default());
         assert!(pose.y > -1.0, "{pose:?}");
         assert!(wrap_angle(pose.yaw - FRAC_PI_2).abs() < 0.3, "{pose:?}");
+    }
+
+    #[test]
+    fn a_way_that_turns_off_at_its_end_is_handed_back_not_turned_about_in() {
+        // The way behind the doorway (1 m wide) ends 3 m in, where it turns off, 1 m wide,
+        // to one side: no dead end. The robot hands back to the follower there, still facing
+        // down the way, for the follower to take the corner (a turn about would shut the way
+        // off: an L between a hedge's end and a room wall, r3111-light).
+        for arm in [1.0, -1.0] {
+            let (near, far) = if arm > 0.0 { (2.0, 1.0) } else { (1.0, 2.0) };
+            let mut walls = doorway(1.0);
+            walls.extend([
+                (DVec2::new(far, -1.0), DVec2::new(far, -4.0)),
+                (DVec2::new(near, -1.0), DVec2::new(near, -3.0)),
+                (DVec2::new(far, -4.0), DVec2::new(near + 4.0 * arm, -4.0)),
+                (DVec2::new(near, -3.0), DVec2::new(near + 4.0 * arm, -3.0)),
+            ]);
+            let pose = drive_through(&walls, Pose::default());
+            assert!(pose.y < -2.9, "arm {arm}: {pose:?}");
+            assert!(
+                wrap_angle(pose.yaw + FRAC_PI_2).abs() < 0.5,
+                "arm {arm}: {pose:?}"
+            );
+        }
     }
 
     /// Where the robot following the wall of [`doorway`] stands when it gives a gap up: backed

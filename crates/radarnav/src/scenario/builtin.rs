@@ -73,6 +73,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/bush-cluster.toml"),
     ),
     (
+        "nav/bush-band",
+        include_str!("../../../../scenarios/nav/bush-band.toml"),
+    ),
+    (
         "nav/bush-pocket",
         include_str!("../../../../scenarios/nav/bush-pocket.toml"),
     ),
