@@ -154,18 +154,11 @@ fn bug2_in_clusters_takes_up_the_neighbour_that_blocked_its_crossings() {
     // than its hit point.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    use radarnav::trials::{SensorClass, Trial};
     let runs: Vec<_> = [("nav/crates-dense", 1), ("nav/bush-field", 3)]
         .par_iter()
         .map(|&(name, seed)| {
             let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
-            let trial = Trial {
-                algorithm: BugAlgorithm::Bug2,
-                sensor: SensorClass::Laser,
-                pose: PoseSource::Truth,
-                seed,
-            };
-            map.run(&trial).expect("the run starts")
+            laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, seed)
         })
         .collect();
     assert_clean(&runs);
@@ -236,21 +229,28 @@ fn a_way_through_a_bush_band_that_turns_along_the_wall_is_followed_round_its_cor
     // (Bug2 back at its hit point on seed 1, Bug1 its closest point blocked on seed 2).
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    use radarnav::trials::{SensorClass, Trial};
     let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
     let runs: Vec<_> = [(BugAlgorithm::Bug2, 1), (BugAlgorithm::Bug1, 2)]
         .par_iter()
-        .map(|&(algorithm, seed)| {
-            let trial = Trial {
-                algorithm,
-                sensor: SensorClass::Laser,
-                pose: PoseSource::Truth,
-                seed,
-            };
-            map.run(&trial).expect("the run starts")
-        })
+        .map(|&(algorithm, seed)| laser_run(&map, algorithm, PoseSource::Truth, seed))
         .collect();
     assert_clean(&runs);
+}
+
+/// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
+fn laser_run(
+    map: &TrialMap,
+    algorithm: radarnav::nav::BugAlgorithm,
+    pose: radarnav::map::PoseSource,
+    seed: u64,
+) -> radarnav::trials::TrialResult {
+    let trial = radarnav::trials::Trial {
+        algorithm,
+        sensor: radarnav::trials::SensorClass::Laser,
+        pose,
+        seed,
+    };
+    map.run(&trial).expect("the run starts")
 }
 
 /// Runs the laser, seed 1, in each (algorithm, pose) of `configs` on the built-in trial map
