@@ -175,6 +175,7 @@ fn a_robot_stuck_in_a_pocket_between_bushes_drives_back_out_the_way_it_came() {
     use radarnav::nav::BugAlgorithm;
     assert_retraced_clean(
         "nav/bush-pocket",
+        radarnav::trials::SensorClass::Laser,
         &[
             (BugAlgorithm::Bug1, PoseSource::Odometry),
             (BugAlgorithm::Bug2, PoseSource::Truth),
@@ -188,13 +189,34 @@ fn a_robot_that_backed_out_of_a_slot_retraces_the_way_in_not_the_slot() {
     // turn in, backed out, and was stuck at its mouth. Its retrace drove the newest metres
     // of its path back, which were the backing out: into the slot again, where it turned and
     // bumped the wall 3 times. The way back now leaves out such detours, and ends where the
-    // body can turn.
+    // body can turn. The radar's followers still retrace a dead end there.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::SensorClass;
     assert_retraced_clean(
         "nav/wall-slot",
-        &[(BugAlgorithm::Bug1, PoseSource::Odometry)],
+        SensorClass::Radar,
+        &[
+            (BugAlgorithm::Bug1, PoseSource::Odometry),
+            (BugAlgorithm::Bug1, PoseSource::Truth),
+        ],
     );
+}
+
+#[test]
+fn a_turn_guard_backing_out_of_a_slot_keeps_the_room_its_way_in_gives() {
+    // The laser's run above was stuck at the slot's mouth because the turn guard's escape
+    // gave up after one step back: it counted the room behind once, from the trail's newest
+    // points, and backing along the trail puts the stretch just backed over ahead of the
+    // body. Counted afresh each step, with points ahead on the axis line, the escape backs
+    // out of the slot and the robot is never stuck there.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map = TrialMap::new(Scenario::builtin("nav/wall-slot").expect("built-in")).expect("bug");
+    let run = laser_run(&map, BugAlgorithm::Bug1, PoseSource::Odometry, 1);
+    assert_clean(std::slice::from_ref(&run));
+    let why = failures(std::slice::from_ref(&run)).join("\n");
+    assert_eq!(run.dead_ends, 0, "stuck at the slot\n{why}");
 }
 
 #[test]
@@ -253,20 +275,21 @@ fn laser_run(
     map.run(&trial).expect("the run starts")
 }
 
-/// Runs the laser, seed 1, in each (algorithm, pose) of `configs` on the built-in trial map
+/// Runs `sensor`, seed 1, in each (algorithm, pose) of `configs` on the built-in trial map
 /// `name`: each passes without a bump, having retraced at least one dead end.
 fn assert_retraced_clean(
     name: &str,
+    sensor: radarnav::trials::SensorClass,
     configs: &[(radarnav::nav::BugAlgorithm, radarnav::map::PoseSource)],
 ) {
-    use radarnav::trials::{SensorClass, Trial};
+    use radarnav::trials::Trial;
     let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
     let runs: Vec<_> = configs
         .par_iter()
         .map(|&(algorithm, pose)| {
             let trial = Trial {
                 algorithm,
-                sensor: SensorClass::Laser,
+                sensor,
                 pose,
                 seed: 1,
             };

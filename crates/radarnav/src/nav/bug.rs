@@ -71,8 +71,9 @@
 //!   else backs off a little where the way behind is seen free and backing takes the body
 //!   away from what it would sweep, else (a way narrower than the turning circle) drives on
 //!   along it up to 3 m to where it is clear, or back as far, but no farther than it had
-//!   just come forward along that line ([`Trail::straight_behind`]: behind, a 270° laser is
-//!   blind); a turn that bumped backs off 0.15 m;
+//!   just come forward along that line ([`Trail::straight_behind`], counted afresh each step,
+//!   so backing along the way in keeps its room: behind, a 270° laser is blind); a turn that
+//!   bumped backs off 0.15 m;
 //! * turning about or leaving waits while the follower is committed to a gap
 //!   ([`super::passage::Passage::committed`]: in it, not on the way to it);
 //! * every command then passes the [`super::guard`]: swept along its arc, it must not bring
@@ -451,8 +452,8 @@ pub struct BugController {
     backing: f64,
     /// Distance moved (on or back) before the turn now wanted (believed), m, and where from.
     shifted: (f64, Option<DVec2>),
-    /// How far straight back the robot had come forward when the move began, m
-    /// ([`Trail::straight_behind`]).
+    /// How far straight back along the body's axis the robot's own trail still runs, m
+    /// ([`Trail::straight_behind`]), counted afresh each step.
     behind: f64,
     /// Whether the retry with the boundary on the other side was made.
     side_retried: bool,
@@ -626,11 +627,9 @@ impl Behaviour for BugController {
             let v = input.vehicle;
             // Backing far is blind (a 270° laser sees nothing behind, remembered returns
             // drift): only as far as the robot had just come forward that way.
-            if self.shifted.1.is_none() {
-                self.behind = self
-                    .trail
-                    .straight_behind(&nav_pose(self.mission.pose, input));
-            }
+            self.behind = self
+                .trail
+                .straight_behind(&nav_pose(self.mission.pose, input));
             let behind = self.behind;
             let (moved, from) = &mut self.shifted;
             *moved += from.map_or(0.0, |f| (p - f).length());
@@ -650,7 +649,7 @@ impl Behaviour for BugController {
                     .or_else(|| room(2.0 * BACK_OFF, -1.0))
                     .or(back_off.then_some(-BACK_SPEED))
                     .or_else(|| room(ESCAPE_MAX, 1.0))
-                    .or_else(|| room(ESCAPE_MAX.min(behind), -1.0));
+                    .or_else(|| room(ESCAPE_MAX.min(behind + *moved), -1.0));
                 if let Some(speed) = speed {
                     d = Decision::Drive(DriveCommand::twist(speed, 0.0));
                     self.turned = false;

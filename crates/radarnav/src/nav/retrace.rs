@@ -97,14 +97,16 @@ impl Trail {
     }
 
     /// How far straight back from the believed `pose` the robot came forward along its own
-    /// trail, m: the trail's newest points within [`ALONG_AXIS`] of the body's axis behind it.
-    /// Backing that far goes where the body has just been; a 270° laser sees nothing there.
+    /// trail, m: the farthest behind of the trail's newest points that lie within
+    /// [`ALONG_AXIS`] of the body's axis line. Backing that far goes where the body has just
+    /// been; a 270° laser sees nothing there. Points ahead on the line count as on it: a robot
+    /// backing along the way it came has the stretch it backed over ahead of it.
     pub fn straight_behind(&self, pose: &Pose) -> f64 {
         let to_body = pose.inverse();
         let mut behind: f64 = 0.0;
         for (q, _) in self.points.iter().rev() {
             let r = to_body.compose(&Pose::new(q.x, q.y, 0.0, 0.0)).xy();
-            if r.x > ALONG_AXIS || r.y.abs() > ALONG_AXIS {
+            if r.y.abs() > ALONG_AXIS {
                 break;
             }
             behind = behind.max(-r.x);
@@ -323,6 +325,23 @@ mod tests {
         assert!(t.straight_behind(&Pose::new(0.5, 0.0, 0.0, FRAC_PI_2)) < 1e-9);
         // Facing back down the trail: it lies ahead.
         assert!(t.straight_behind(&Pose::new(0.5, 0.0, 0.0, PI)) < 1e-9);
+    }
+
+    #[test]
+    fn straight_behind_holds_while_backing_along_the_trail() {
+        // In along x to x = 2, then backing: each step back, the trail behind is still there
+        // (the stretch just backed over lies ahead on the axis). Counted as nothing, it cut
+        // a turn guard's escape back short after one step, and the turn went on anyway.
+        let mut t = trail_of(&[DVec2::new(0.0, 0.0), DVec2::new(2.0, 0.0)]);
+        for k in 1..=15 {
+            let x = 2.0 - 0.01 * k as f64;
+            t.record(DVec2::new(x, 0.0));
+            let b = t.straight_behind(&Pose::new(x, 0.0, 0.0, 0.0));
+            assert!((b - x).abs() < 0.11, "at x = {x}: {b}");
+        }
+        // Turned off the line while backing: only what lies along the new axis counts.
+        let b = t.straight_behind(&Pose::new(1.85, 0.0, 0.0, 0.3));
+        assert!(b < 0.4, "{b}");
     }
 
     /// Drives `r` from `pose` among the world points `world` until it ends; the poses.
