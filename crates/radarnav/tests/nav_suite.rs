@@ -204,6 +204,19 @@ fn a_robot_that_backed_out_of_a_slot_retraces_the_way_in_not_the_slot() {
 }
 
 #[test]
+fn bug1_on_the_true_pose_replays_its_loop_back_to_the_closest_point() {
+    // Round the bush band, Bug1's laser follower met its closest point in a gap of the band;
+    // following the boundary again to get back there, it passed that gap by and met the point
+    // nowhere within half a loop (`no_path`). On a pose that does not drift it now drives the
+    // path it followed back to the point.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
+    let run = laser_run(&map, BugAlgorithm::Bug1, PoseSource::Truth, 1);
+    assert_clean(std::slice::from_ref(&run));
+}
+
+#[test]
 fn a_turn_guard_backing_out_of_a_slot_keeps_the_room_its_way_in_gives() {
     // The laser's run above was stuck at the slot's mouth because the turn guard's escape
     // gave up after one step back: it counted the room behind once, from the trail's newest

@@ -5,7 +5,13 @@
 //! * **Bug1** goes once round the whole obstacle, remembering the boundary point closest to
 //!   the goal and how far along the boundary it lay; back at the hit point it goes to that
 //!   point the shorter way round (turning about and following with the obstacle on the other
-//!   side when going back is shorter, so it covers at most 1.5 perimeters) and leaves there
+//!   side when going back is shorter, so it covers at most 1.5 perimeters) and leaves there.
+//!   On a pose that does not drift (the true pose, SLAM) it goes there by **replaying the
+//!   path it followed** ([`Retrace::replay`]): following the boundary again may pass a gap
+//!   of a cluster the loop did not take, or the other way round, and never meet the point;
+//!   the replay has no stand-in for the point (nor leaves for a neighbour) before it ends
+//!   there. On odometry the path of a loop ago is off by the drift since, and where a replay
+//!   is blocked the follower goes on as below. Following, it leaves there
 //!   (or wherever it is within half the loop tolerance as close to the goal, or once it has
 //!   followed the boundary as far as that point lay, within twice the loop tolerance of it).
 //!   If the way toward the goal is blocked all along the loop tolerance round that point,
@@ -316,6 +322,14 @@ struct Boundary {
     /// behind because the way toward the goal was blocked there: (position, distance to the
     /// goal, distance followed).
     blocked_crossing: Option<(DVec2, f64, f64)>,
+    /// Bug1, once circled: the way to the closest point is the loop run backwards (shorter
+    /// than going on).
+    replay_back: bool,
+    /// Bug1, once circled: the way to the closest point is still to be set out on (once no
+    /// gap is being passed).
+    replay_pending: bool,
+    /// Bug1: driving the followed path back to the closest point.
+    replay: Option<Retrace>,
 }
 
 impl Boundary {
@@ -340,7 +354,40 @@ impl Boundary {
             trail: Vec::new(),
             loop_from: 0.0,
             blocked_crossing: None,
+            replay_back: false,
+            replay_pending: false,
+            replay: None,
         }
+    }
+
+    /// Bug1, once circled: the followed path from where the robot at `p` stands on it to
+    /// the closest point, as points to drive in turn: the loop run backwards from here when
+    /// `back`, else the loop from its start (from the sample nearest `p` within the stretch
+    /// followed since it closed, and `tol` more). Empty when the closest point lies before
+    /// the loop's start.
+    fn way_to_closest(&self, p: DVec2, back: bool, tol: f64) -> Vec<DVec2> {
+        let c = self.closest.2;
+        if c < self.loop_from {
+            return Vec::new();
+        }
+        if back {
+            return (self.trail.iter().rev())
+                .take_while(|s| s.2 >= c)
+                .map(|s| s.0)
+                .collect();
+        }
+        let on: Vec<DVec2> = (self.trail.iter())
+            .filter(|s| s.2 >= self.loop_from && s.2 <= c)
+            .map(|s| s.0)
+            .collect();
+        let since = self.travelled - self.loop_len + tol;
+        let from = (self.trail.iter())
+            .filter(|s| s.2 >= self.loop_from && s.2 <= c)
+            .take_while(|s| s.2 <= self.loop_from + since)
+            .enumerate()
+            .min_by(|a, b| (a.1.0 - p).length().total_cmp(&(b.1.0 - p).length()))
+            .map_or(0, |(k, _)| k);
+        on[from..].to_vec()
     }
 
     /// Takes back the last part of the followed path, which went `length` metres into a dead
@@ -620,8 +667,10 @@ impl Behaviour for BugController {
         // A turn on the spot sweeps the body's circumscribed circle: with a corner inside it,
         // move to where it is clear first, then turn: ahead, where the sensor sees, or else
         // back a little. (A retrace turns only where its sweep is free.)
+        let replaying = matches!(&self.mode, Mode::Follow(bd) if bd.replay.is_some());
         if self.turned
             && self.retrace.is_none()
+            && !replaying
             && let Some(b) = self.bumpers.update(input)
         {
             let v = input.vehicle;
@@ -872,9 +921,8 @@ impl BugController {
                             // back after the rest of the loop: turn about when that is shorter.
                             let ahead = bd.closest.2;
                             let behind = bd.travelled - bd.closest.2;
-                            if behind < ahead {
-                                bd.about_turn = std::f64::consts::PI;
-                            }
+                            bd.replay_back = behind < ahead;
+                            bd.replay_pending = true;
                             bd.leave_at = bd.travelled + ahead.min(behind);
                             bd.loop_len = bd.travelled;
                             let ring: Vec<DVec2> = bd.trail.iter().map(|s| s.0).collect();
@@ -885,6 +933,26 @@ impl BugController {
                                     p,
                                     vehicle,
                                 );
+                            }
+                        }
+                        // Back to the closest point along the path followed: following
+                        // the boundary again may pass a gap the loop did not take, or the
+                        // other way round, and never meet the point. Where the path cannot
+                        // be driven (or is not known), the follower goes on (or turns
+                        // about to go back) as far as the point lay.
+                        if bd.replay_pending && !passing {
+                            bd.replay_pending = false;
+                            // On dead reckoning the path followed a loop ago is off by
+                            // the drift since: the follower finds the boundary again.
+                            if self.mission.pose != PoseSource::Odometry {
+                                let way = bd.way_to_closest(p, bd.replay_back, tol);
+                                bd.replay = Retrace::replay(way, self.mission.speed, input.time);
+                            }
+                            if bd.replay.is_none() && bd.replay_back {
+                                bd.about_turn = std::f64::consts::PI;
+                            }
+                            if (p - bd.closest.0).length() > 2.0 * tol {
+                                bd.away_from_closest = true;
                             }
                         }
                         // Turning about or leaving waits until a gap being passed is
@@ -911,20 +979,25 @@ impl BugController {
                             // it, where the way toward the goal is open.
                             let near = from_closest <= tol
                                 && (bd.away_from_closest || bd.closest.0 == bd.hit);
-                            let as_close = near || goal_dist <= bd.closest.1 + tol / 2.0;
-                            let at_closest = as_close
-                                || bd.travelled >= bd.leave_at && from_closest <= 2.0 * tol;
+                            // A replay drives the very path to the point: no stand-in
+                            // for it counts, nor does leaving for a neighbour before it
+                            // ends there.
+                            let replaying = bd.replay.is_some();
+                            let as_close =
+                                near || goal_dist <= bd.closest.1 + tol / 2.0 && !replaying;
+                            let odometer = bd.travelled >= bd.leave_at && !replaying;
+                            let at_closest = as_close || odometer && from_closest <= 2.0 * tol;
                             // Blocked there: when the loop went round the goal the same
                             // obstacle lies in the way, once the robot has passed the closest
                             // point with the way blocked all along; else a neighbour does,
                             // and the robot leaves to take it up (just past the point when it
                             // was passing a gap there).
                             // Beyond the same boundary, Bug1's odometer says it too.
-                            let passed = bd.near_closest && !near
-                                || bd.goal_beyond && bd.travelled >= bd.leave_at;
+                            let passed = (bd.near_closest && !near || bd.goal_beyond && odometer)
+                                && !replaying;
                             bd.near_closest |= near;
                             let leave = at_closest && !goal_blocked
-                                || (as_close || passed) && !bd.goal_beyond;
+                                || (as_close || passed) && !bd.goal_beyond && !replaying;
                             if leave && !passing {
                                 self.report.leave_points.push(p.to_array());
                                 self.last_leave = Some((p, goal_dist, bd.goal_beyond));
@@ -947,6 +1020,31 @@ impl BugController {
                                     p,
                                     vehicle,
                                 );
+                            }
+                        }
+                        if let Some(r) = &mut bd.replay {
+                            let step = r.step(
+                                &pose,
+                                input.time,
+                                b.clearance(),
+                                vehicle.length,
+                                vehicle.width,
+                            );
+                            match step {
+                                RetraceStep::Drive(c) if !bumped => return Decision::Drive(c),
+                                _ => {
+                                    bd.replay = None;
+                                    if step == RetraceStep::Done {
+                                        bd.travelled = bd.travelled.max(bd.leave_at);
+                                    }
+                                    if bd.replay_back {
+                                        let other = self.follower.side().other();
+                                        self.follower = self.new_follower(other, vehicle);
+                                    } else {
+                                        self.follower.engage();
+                                    }
+                                    return Decision::Drive(DriveCommand::STOP);
+                                }
                             }
                         }
                     }

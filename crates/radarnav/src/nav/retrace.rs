@@ -19,6 +19,10 @@
 //!
 //! The controller remembers the place as a dead end. Its follower passes no gap near it
 //! again (see [`super::wall_follow::WallFollower::avoid`]).
+//!
+//! A [`Retrace::replay`] drives a given path forward to its end, turning on the spot (sweep
+//! checked) to face it where needed: Bug1 goes back to its closest point so, along the loop
+//! it followed.
 
 use std::collections::VecDeque;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -139,6 +143,13 @@ pub struct Retrace {
     since: f64,
     /// Distance driven (believed), m, and the last position it was counted from.
     driven: (f64, Option<DVec2>),
+    /// Whether the robot may back where the next point lies behind (a retrace) or always
+    /// faces it first (a replay: the sensor looks where the robot goes).
+    backs: bool,
+    /// Speed driving forward, m/s.
+    speed: f64,
+    /// Time the drive may take, s.
+    timeout: f64,
 }
 
 impl Retrace {
@@ -161,6 +172,34 @@ impl Retrace {
             away,
             since: time,
             driven: (0.0, None),
+            backs: true,
+            speed: FORWARD_SPEED,
+            timeout: TIMEOUT,
+        })
+    }
+
+    /// A replay of `path` (believed points, in the order to drive them) at up to `speed`
+    /// m/s, started at `time`: forward only, turning on the spot to face the next point where
+    /// it lies off the way ahead; done at its last point. `None` for fewer than two points.
+    /// Bug1 goes back to its closest point so: along the path it followed, which it knows
+    /// to be passable, where following the boundary again may pass a gap the first loop did
+    /// not take (or the other way round).
+    pub fn replay(path: Vec<DVec2>, speed: f64, time: f64) -> Option<Self> {
+        if path.len() < 2 {
+            return None;
+        }
+        let length: f64 = path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        let speed = speed.clamp(FORWARD_SPEED, 1.5 * FORWARD_SPEED);
+        Some(Self {
+            path,
+            next: 0,
+            away: f64::INFINITY,
+            since: time,
+            driven: (0.0, None),
+            backs: false,
+            speed,
+            // Twice the time driving takes, turns on the spot on top.
+            timeout: TIMEOUT + 2.0 * length / speed,
         })
     }
 
@@ -179,7 +218,7 @@ impl Retrace {
         length: f64,
         width: f64,
     ) -> RetraceStep {
-        if time - self.since > TIMEOUT {
+        if time - self.since > self.timeout {
             return RetraceStep::Blocked;
         }
         let p = pose.xy();
@@ -204,8 +243,8 @@ impl Retrace {
         };
         let bearing = wrap_angle((target - p).to_angle() - pose.yaw);
         // Forward where the trail goes on ahead, backing where it goes on behind.
-        let (error, speed) = if bearing.abs() <= FRAC_PI_2 {
-            (bearing, FORWARD_SPEED)
+        let (error, speed) = if bearing.abs() <= FRAC_PI_2 || !self.backs {
+            (bearing, self.speed)
         } else {
             (wrap_angle(bearing - PI), -BACK_SPEED)
         };
@@ -223,8 +262,11 @@ impl Retrace {
             v: speed,
             omega: 0.0,
         };
-        [drive, turn, straight]
+        // Straight on helps a replay only when it faces the way on.
+        let straight_on = self.backs || error.abs() <= DRIVE_WITHIN;
+        [Some(drive), Some(turn), straight_on.then_some(straight)]
             .into_iter()
+            .flatten()
             .find(|t| !sweep_touches(points, length, width, *t))
             .map_or(RetraceStep::Blocked, |t| {
                 RetraceStep::Drive(DriveCommand::twist(t.v, t.omega))
@@ -431,5 +473,33 @@ mod tests {
         assert_eq!(end, RetraceStep::Blocked);
         let last = poses.last().unwrap();
         assert!(last.x - L / 2.0 > 0.8, "{last:?}");
+    }
+
+    #[test]
+    fn a_replay_turns_to_face_its_path_and_drives_it_forward_to_its_end() {
+        // An L (east 2 m, then north 2 m) behind a robot facing west at its start: a retrace
+        // would back; a replay turns about and drives it forward, through a way 0.8 m wide
+        // round the corner, to its last point.
+        let path: Vec<DVec2> = (0..=20)
+            .map(|k| DVec2::new(0.1 * k as f64, 0.0))
+            .chain((1..=20).map(|k| DVec2::new(2.0, 0.1 * k as f64)))
+            .collect();
+        let mut world = side(DVec2::new(-1.0, -0.4), DVec2::new(2.4, -0.4));
+        world.extend(side(DVec2::new(2.4, -0.4), DVec2::new(2.4, 2.5)));
+        world.extend(side(DVec2::new(0.5, 0.4), DVec2::new(1.6, 0.4)));
+        world.extend(side(DVec2::new(1.6, 0.4), DVec2::new(1.6, 2.5)));
+        let mut r = Retrace::replay(path, 0.4, 0.0).unwrap();
+        let (end, poses) = drive(&mut r, Pose::new(0.0, 0.0, 0.0, PI), &world);
+        assert_eq!(end, RetraceStep::Done);
+        let last = poses.last().unwrap();
+        assert!(last.xy().distance(DVec2::new(2.0, 2.0)) < 0.35, "{last:?}");
+        // Never backing: each step goes the way the body faces.
+        for w in poses.windows(2) {
+            let d = w[1].xy() - w[0].xy();
+            assert!(d.dot(DVec2::from_angle(w[0].yaw)) >= -1e-9, "{w:?}");
+        }
+        // It ends facing north, having turned about first.
+        assert!((last.yaw - FRAC_PI_2).abs() < 0.5, "{last:?}");
+        assert!(Retrace::replay(vec![DVec2::ZERO], 0.4, 0.0).is_none());
     }
 }
