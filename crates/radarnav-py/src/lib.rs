@@ -1,6 +1,6 @@
 //! `radarnav._core`: the Python module over the radarnav library (DESIGN §8).
 //!
-//! [`PyScenario`] loads a scenario (built-in, file or TOML text); [`PySim`] runs one robot
+//! `PyScenario` loads a scenario (built-in, file or TOML text); `PySim` runs one robot
 //! of it driven from Python: `step`/`advance` with a twist or track speeds, `scan` and
 //! `ranges` as numpy arrays (moved into numpy, not copied), poses, maps and figures. The
 //! sweep functions run and merge shards for the Python Ray driver. The Gymnasium

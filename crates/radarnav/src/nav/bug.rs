@@ -57,9 +57,9 @@
 //!   follower passes gaps and closes loops differently going the other way round, while a
 //!   goal that cannot be reached is found so both ways. Only then is `no_path` reported.
 //!   The retries are in the report; the bumpers keep what they remember across them;
-//! * a robot that has not got [`STILL_RADIUS`] from one place in [`STILL_TIME`] (turning on
+//! * a robot that has not got `STILL_RADIUS` from one place in `STILL_TIME` (turning on
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
-//!   a corner) first **retraces** the way it came until [`RETRACE`] metres from there and
+//!   a corner) first **retraces** the way it came until `RETRACE` metres from there and
 //!   free to turn on the spot ([`super::retrace`]; the way it came has its loops and
 //!   there-and-back detours taken out), remembers the place as a dead end whose gaps the
 //!   follower does not pass again, and goes on (following the boundary from the point it
@@ -67,7 +67,7 @@
 //!   [`DEAD_END_RADIUS`] of a dead end, it has met a `no_path` condition, and retries with a
 //!   smaller standoff (dead ends are forgotten: at a smaller standoff the way may be open);
 //! * coming back past the hit point the other way (out of a dead end) closes no loop;
-//! * Bug2 leaves the boundary for a **goal in sight** ([`GOAL_SIGHT`]): nearer than its hit
+//! * Bug2 leaves the boundary for a **goal in sight** (`GOAL_SIGHT`): nearer than its hit
 //!   point, ahead of the body's side, the body's corridor to it free. Driving straight there
 //!   meets nothing, so its progress holds off the m-line too (as in VisBug); a follower that
 //!   took up a room wall passes goals beyond the m-line's end and never crosses it nearer;

@@ -5,7 +5,7 @@
 //! circle, the strip through a gap), but a command is an arc: a robot turning away from a
 //! wall beside it swings its rear into a corner it has just passed, and one heading for the
 //! goal past a crate's corner clips it with a front corner while the goal's sector is clear.
-//! So every command is swept along its arc for [`HORIZON`] seconds against the returns
+//! So every command is swept along its arc for `HORIZON` seconds against the returns
 //! ([`super::Bumpers::clearance`]); one that would bring the body to touch them is replaced
 //! by its straight part, or by its turn on the spot, whichever is free, or else the robot
 //! stops and the behaviour is told it bumped, as a real bumper would have told it a moment
@@ -74,8 +74,8 @@ fn clearance(points: &[DVec2], pose: &Pose, length: f64, width: f64) -> f64 {
     nearest[HITS_TO_BLOCK - 1]
 }
 
-/// Whether a body of `length` × `width` m driven by `t` for [`HORIZON`] seconds comes nearer
-/// the robot-frame returns `points` than [`MARGIN`] (its [`clearance`]), or, already that
+/// Whether a body of `length` × `width` m driven by `t` for `HORIZON` seconds comes nearer
+/// the robot-frame returns `points` than `MARGIN` (its `clearance`), or, already that
 /// near, nearer than it is now: a robot beside a wall may drive along it, not turn into it.
 pub fn sweep_touches(points: &[DVec2], length: f64, width: f64, t: Twist) -> bool {
     if t.v == 0.0 && t.omega == 0.0 {

@@ -173,7 +173,7 @@ fn behind_clear(points: &[DVec2], length: f64, width: f64) -> bool {
 }
 
 /// Whether a body of `length` × `width` m can turn on the spot among the robot-frame returns
-/// `points`: fewer than [`HITS_TO_BLOCK`] lie in the circle it sweeps (its half-diagonal
+/// `points`: fewer than `HITS_TO_BLOCK` lie in the circle it sweeps (its half-diagonal
 /// plus [`BODY_MARGIN`]).
 pub fn turn_clear(points: &[DVec2], length: f64, width: f64) -> bool {
     turn_clear_at(points, 0.0, length, width)

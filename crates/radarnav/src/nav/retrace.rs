@@ -102,7 +102,7 @@ impl Trail {
 
     /// How far straight back from the believed `pose` the robot came forward along its own
     /// trail, m: the farthest behind of the trail's newest points that lie within
-    /// [`ALONG_AXIS`] of the body's axis line. Backing that far goes where the body has just
+    /// `ALONG_AXIS` of the body's axis line. Backing that far goes where the body has just
     /// been; a 270° laser sees nothing there. Points ahead on the line count as on it: a robot
     /// backing along the way it came has the stretch it backed over ahead of it.
     pub fn straight_behind(&self, pose: &Pose) -> f64 {
