@@ -859,7 +859,7 @@ impl TriMesh {
     /// ahead of its search. A scene of many meshes does not fit in the caches, and a search
     /// otherwise waits on each box's fetch in turn; this way the boxes a node lets through
     /// are fetched together, while the search goes on (1 M triangles of generated plants:
-    /// about a quarter more laser rays per second).
+    /// 12–18 % more laser rays and 17–21 % more radar rays per CPU-second).
     #[inline]
     fn prefetch(&self, link: u32, count: u32) {
         #[cfg(target_arch = "x86_64")]

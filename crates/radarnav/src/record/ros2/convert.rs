@@ -88,7 +88,8 @@ pub fn odometry(ns: u64, step: &Step) -> msg::Odometry {
 }
 
 /// A scan as a LaserScan in its sensor's `frame`: the plane `plane` (see
-/// [`SensorConfig::horizontal_plane`](crate::sensor::SensorConfig::horizontal_plane)), `scan_time` s between scans, +inf where nothing returned.
+/// [`SensorConfig::horizontal_plane`](crate::sensor::SensorConfig::horizontal_plane)),
+/// `scan_time` s between scans, +inf where nothing returned.
 pub fn laser_scan(scan: &Scan, frame: &str, plane: usize, scan_time: f64) -> msg::LaserScan {
     let rows = plane * scan.azimuths..(plane + 1) * scan.azimuths;
     let angle_max = scan.angle_min + (scan.azimuths.max(1) - 1) as f64 * scan.angle_increment;
