@@ -272,6 +272,43 @@ fn a_way_through_a_bush_band_that_turns_along_the_wall_is_followed_round_its_cor
     assert_clean(&runs);
 }
 
+#[test]
+fn a_way_seen_at_a_slant_by_a_noisy_laser_is_taken_for_its_width() {
+    // The only ways on are 0.746 and 0.865 m wide; coming down a wall piece, the laser saw
+    // the narrower one almost along the wall faces, and its range noise moved the closest
+    // returns across it 0.17 m nearer together than the way is wide: both Bugs ended
+    // `no_path` on the true pose (Bug1 seed 1, Bug2 seed 3). The noise across the gap is now
+    // added back to each pair of returns.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map = TrialMap::new(Scenario::builtin("nav/gap-slant").expect("built-in")).expect("bug");
+    let runs: Vec<_> = [(BugAlgorithm::Bug1, 1), (BugAlgorithm::Bug2, 3)]
+        .par_iter()
+        .map(|&(algorithm, seed)| laser_run(&map, algorithm, PoseSource::Truth, seed))
+        .collect();
+    assert_clean(&runs);
+}
+
+#[test]
+fn a_turn_stopped_in_a_slot_barely_wider_than_the_turning_circle_is_not_backed_off_blindly() {
+    // The slot's mouth, measured with the laser's noise added back, is wide enough to take.
+    // Turning in it, a turn the guard stopped part of the way round used to back the robot
+    // off 0.15 m, blind behind, with the body turned off the slot's line, again and again:
+    // 3 bumps (Bug2, true pose, seed 2) and 1 (Bug1, odometry, seed 1) on the north wall.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map =
+        TrialMap::new(Scenario::builtin("nav/slot-narrowing").expect("built-in")).expect("bug");
+    let runs: Vec<_> = [
+        (BugAlgorithm::Bug2, PoseSource::Truth, 2),
+        (BugAlgorithm::Bug1, PoseSource::Odometry, 1),
+    ]
+    .par_iter()
+    .map(|&(algorithm, pose, seed)| laser_run(&map, algorithm, pose, seed))
+    .collect();
+    assert_clean(&runs);
+}
+
 /// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
 fn laser_run(
     map: &TrialMap,

@@ -78,8 +78,11 @@
 //!   away from what it would sweep, else (a way narrower than the turning circle) drives on
 //!   along it up to 3 m to where it is clear, or back as far, but no farther than it had
 //!   just come forward along that line ([`Trail::straight_behind`], counted afresh each step,
-//!   so backing along the way in keeps its room: behind, a 270° laser is blind); a turn that
-//!   bumped backs off 0.15 m;
+//!   so backing along the way in keeps its room: behind, a 270° laser is blind). A turn
+//!   that bumped, or that the guard stopped, is taken for one whose circle holds a return,
+//!   whatever the returns in the circle say: the same moves, never a blind back-off (backing
+//!   off with the body turned part of the way off a narrow way's line, again after each
+//!   stopped turn, took a rear corner onto the way's side);
 //! * turning about or leaving waits while the follower is committed to a gap
 //!   ([`super::passage::Passage::committed`]: in it, not on the way to it);
 //! * every command then passes the [`super::guard`]: swept along its arc, it must not bring
@@ -118,9 +121,9 @@ const RETRY_FACTOR: f64 = 0.6;
 const TRAIL_STEP: f64 = 0.2;
 /// Two passes whose headings differ by less than this go the same way round, rad (60°).
 const SAME_WAY: f64 = 1.05;
-/// A turn on the spot with a return inside the circle the body sweeps, or one that bumped,
-/// backs the robot off this far first, m (a box-shaped body turning near a corner sweeps
-/// past its sides); twice this at most before turning anyway.
+/// A turn on the spot with a return inside the circle the body sweeps (or one that bumped)
+/// backs the robot off this far where no short move clears it, m (a box-shaped body turning
+/// near a corner sweeps past its sides); twice this at most before turning anyway.
 const BACK_OFF: f64 = 0.15;
 /// A turn on the spot with a return inside the circle the body sweeps drives on first to
 /// where it is clear, if that is seen free within this distance, m (half a body length
@@ -495,8 +498,6 @@ pub struct BugController {
     still: Option<(DVec2, f64)>,
     /// Whether the last command turned on the spot.
     turned: bool,
-    /// Distance still to back off after a turn on the spot bumped, m.
-    backing: f64,
     /// Distance moved (on or back) before the turn now wanted (believed), m, and where from.
     shifted: (f64, Option<DVec2>),
     /// How far straight back along the body's axis the robot's own trail still runs, m
@@ -536,7 +537,6 @@ impl BugController {
             last_leave: None,
             still: None,
             turned: false,
-            backing: 0.0,
             shifted: (0.0, None),
             behind: 0.0,
             side_retried: false,
@@ -658,6 +658,8 @@ impl Behaviour for BugController {
     }
 
     fn decide(&mut self, input: &ControlInput<'_>, bumped: bool) -> Decision {
+        // The last command turned on the spot and bumped (or the guard stopped it).
+        let refused = bumped && self.turned;
         let mut d = self.next_decision(input, bumped);
         self.turned = matches!(d, Decision::Drive(c) if c.is_turn_on_the_spot());
         let p = nav_pose(self.mission.pose, input).xy();
@@ -683,7 +685,7 @@ impl Behaviour for BugController {
             let (moved, from) = &mut self.shifted;
             *moved += from.map_or(0.0, |f| (p - f).length());
             *from = Some(p);
-            if !turn_clear(b.clearance(), v.length, v.width) {
+            if refused || !turn_clear(b.clearance(), v.length, v.width) {
                 let room = |max: f64, sign: f64| {
                     room_to_turn(b.clearance(), v.length, v.width, max - *moved, sign)
                         .map(|_| sign * BACK_SPEED)
@@ -811,18 +813,6 @@ impl BugController {
             self.trail.record(p);
         }
         let half_width = vehicle.width / 2.0 + MIN_CLEARANCE;
-        // A turn on the spot bumped (a corner inside the body's turning circle): back off a
-        // little where the way behind is free, then decide again.
-        if bumped && self.turned {
-            self.backing = BACK_OFF;
-        }
-        if self.backing > 0.0 {
-            self.backing -= step;
-            if self.backing > 0.0 && behind_free(&b, vehicle, self.backing + BACK_OFF) {
-                return Decision::Drive(DriveCommand::twist(-BACK_SPEED, 0.0));
-            }
-            self.backing = 0.0;
-        }
         // A goal inside the standoff of an obstacle beyond it: the bumpers trip before the
         // goal is reached, but the body's corridor to the goal (and a margin past it) is free.
         // So for a goal in sight that Bug2 left the boundary for.

@@ -27,6 +27,7 @@ use std::fmt;
 
 use glam::DVec2;
 
+use super::passage::RangeNoise;
 use super::{nav_pose, scan_pose};
 use crate::map::PoseSource;
 use crate::pose::{Pose, wrap_angle};
@@ -192,6 +193,8 @@ pub struct Bumpers {
     clearance: Vec<DVec2>,
     /// The sensor's position in the robot frame, m.
     origin: DVec2,
+    /// The sensor's range noise (none unless [`BumperSensor`] knows the sensor).
+    noise: RangeNoise,
 }
 
 impl Bumpers {
@@ -253,6 +256,7 @@ impl Bumpers {
             clearance: points.clone(),
             points,
             origin: DVec2::new(mount.x, mount.y),
+            noise: RangeNoise::default(),
         }
     }
 
@@ -286,6 +290,11 @@ impl Bumpers {
     /// Where the rays start in the robot frame (the sensor's mount), m.
     pub fn origin(&self) -> DVec2 {
         self.origin
+    }
+
+    /// The range noise of the sensor the returns come from.
+    pub fn noise(&self) -> RangeNoise {
+        self.noise
     }
 
     /// Time of the scan these bumpers come from, s.
@@ -441,6 +450,11 @@ impl BumperSensor {
                 c.band,
                 c.rule,
             );
+            let sensor = &input.sensors[i].config;
+            b.noise = RangeNoise {
+                std: sensor.range_noise_std,
+                rel: sensor.range_noise_rel,
+            };
             let last = self.scan_pose;
             self.scan_pose = scan_pose(self.pose, input, i).unwrap_or(now);
             let pose = self.scan_pose;

@@ -219,11 +219,11 @@ impl WallFollower {
             let seen = find_gap(
                 b.points(),
                 b.origin(),
+                b.noise(),
                 side,
                 2.0 * radius + 0.5,
                 radius + 0.5,
-                turn_diameter,
-                2.0 * radius,
+                turn_diameter..2.0 * radius,
             )
             .map(|gap| gap.in_frame(pose));
             match (&mut g.passage, seen) {

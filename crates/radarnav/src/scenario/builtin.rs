@@ -204,6 +204,15 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         "nav/wall-slot",
         include_str!("../../../../scenarios/nav/wall-slot.toml"),
     ),
+    // Later maps go last: the fast subset's configuration of each map follows its place.
+    (
+        "nav/gap-slant",
+        include_str!("../../../../scenarios/nav/gap-slant.toml"),
+    ),
+    (
+        "nav/slot-narrowing",
+        include_str!("../../../../scenarios/nav/slot-narrowing.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name` (a trial map is `nav/<name>`).
