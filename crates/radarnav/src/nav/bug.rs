@@ -80,9 +80,9 @@
 //!   just come forward along that line ([`Trail::straight_behind`], counted afresh each step,
 //!   so backing along the way in keeps its room: behind, a 270° laser is blind). A turn
 //!   that bumped, or that the guard stopped, is taken for one whose circle holds a return,
-//!   whatever the returns in the circle say: the same moves, never a blind back-off (backing
-//!   off with the body turned part of the way off a narrow way's line, again after each
-//!   stopped turn, took a rear corner onto the way's side);
+//!   whatever the returns in the circle say: the same moves, not a fixed 0.15 m back-off
+//!   (backing off so with the body turned part of the way off a narrow way's line, again
+//!   after each stopped turn, took a rear corner onto the way's side);
 //! * turning about or leaving waits while the follower is committed to a gap
 //!   ([`super::passage::Passage::committed`]: in it, not on the way to it);
 //! * every command then passes the [`super::guard`]: swept along its arc, it must not bring
