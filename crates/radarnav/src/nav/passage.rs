@@ -11,7 +11,8 @@
 //! within a look radius, taken in angle order from behind on the wall side, fall into
 //! *segments* wherever two neighbours lie farther apart than the body can pass; the segment
 //! holding the nearest return on the wall side is the followed boundary, the next one round
-//! is its neighbour, and the gap is the closest pair of returns between the two. A gap at
+//! is its neighbour, and the gap is the closest pair of returns between the two (with a noisy
+//! sensor, closest once each pair gets back the noise that pulls it across). A gap at
 //! least the robot's turning diameter (twice its half-diagonal, so it can turn inside it) and
 //! narrower than twice the follow radius is passed by a [`Passage`]: go to a point in front
 //! of the gap's middle, turn to face through it, and drive through on the line through its
@@ -302,7 +303,7 @@ pub struct Gap {
     pub mid: DVec2,
     /// Unit normal through the gap, pointing away from the robot (forward when it is in it).
     pub normal: DVec2,
-    /// Width between the narrowest pair, m.
+    /// Width between the narrowest pair, with a noisy sensor's pull added back, m.
     pub width: f64,
 }
 
@@ -321,7 +322,9 @@ impl Gap {
 /// The gap on the followed side among robot-frame `points` seen from the sensor at
 /// robot-frame `origin` (see the module docs): `side` is +1 with the boundary on the left,
 /// −1 on the right; returns beyond `look` are ignored, the followed boundary must come within
-/// `near`, and the gap's width must lie in `[min_width, max_width)`.
+/// `near`, and the gap's width must lie in `widths`. Each return's range noise is `noise`:
+/// with noise, each pair's distance gets back what the noise pulls it across the gap
+/// (`NOISE_PULL`).
 pub fn find_gap(
     points: &[DVec2],
     origin: DVec2,
