@@ -27,11 +27,10 @@ use std::fmt;
 
 use glam::DVec2;
 
-use super::passage::RangeNoise;
 use super::{nav_pose, scan_pose};
 use crate::map::PoseSource;
 use crate::pose::{Pose, wrap_angle};
-use crate::sensor::{ReturnMode, Scan, SensorConfig, SensorKind};
+use crate::sensor::{RangeNoise, ReturnMode, Scan, SensorConfig, SensorKind};
 use crate::sim::ControlInput;
 use crate::vehicle::VehicleSpec;
 
@@ -450,11 +449,7 @@ impl BumperSensor {
                 c.band,
                 c.rule,
             );
-            let sensor = &input.sensors[i].config;
-            b.noise = RangeNoise {
-                std: sensor.range_noise_std,
-                rel: sensor.range_noise_rel,
-            };
+            b.noise = input.sensors[i].config.range_noise();
             let last = self.scan_pose;
             self.scan_pose = scan_pose(self.pose, input, i).unwrap_or(now);
             let pose = self.scan_pose;

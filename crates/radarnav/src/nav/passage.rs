@@ -45,6 +45,7 @@
 use glam::DVec2;
 
 use crate::pose::{Pose, wrap_angle};
+use crate::sensor::RangeNoise;
 
 /// Extra clearance kept around the body while passing, m.
 pub const BODY_MARGIN: f64 = 0.02;
@@ -273,23 +274,6 @@ pub fn room_to_turn(points: &[DVec2], length: f64, width: f64, max: f64, sign: f
 /// by a 3 cm laser then comes out within 3 cm of its width from along its wall and in front
 /// of it (unit test), and the laser robot takes the 0.75 m way of `nav/gap-slant`.
 const NOISE_PULL: f64 = 1.5;
-
-/// A sensor's range noise: σ = max(`std`, `rel` × range), as its configuration's
-/// `noise_sigma` gives it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RangeNoise {
-    /// Least σ, m.
-    pub std: f64,
-    /// σ per metre of range.
-    pub rel: f64,
-}
-
-impl RangeNoise {
-    /// σ at `range` metres.
-    pub fn sigma(&self, range: f64) -> f64 {
-        self.std.max(self.rel * range)
-    }
-}
 
 /// Points across a gap checked for being seen open (the pair's ends excluded).
 const GAP_SAMPLES: usize = 6;
@@ -799,6 +783,20 @@ mod tests {
         scan_from(walls, DVec2::ZERO, 1.0)
     }
 
+    /// [`find_gap`] from the robot's centre with noise-free ranges, looking 3 m, the
+    /// followed boundary within 1.5 m.
+    fn gap(pts: &[DVec2], side: f64, widths: std::ops::Range<f64>) -> Option<Gap> {
+        find_gap(
+            pts,
+            DVec2::ZERO,
+            RangeNoise::default(),
+            side,
+            3.0,
+            1.5,
+            widths,
+        )
+    }
+
     /// A wall along x at y = −1 (on the right) with a doorway of `w` m from x = 1.
     fn doorway(w: f64) -> Vec<(DVec2, DVec2)> {
         vec![
@@ -810,71 +808,18 @@ mod tests {
     #[test]
     fn a_doorway_on_the_followed_side_is_found_and_oriented_through() {
         let pts = scan(&doorway(0.8));
-        let g = find_gap(
-            &pts,
-            DVec2::ZERO,
-            RangeNoise::default(),
-            -1.0,
-            3.0,
-            1.5,
-            0.71..3.0,
-        )
-        .expect("gap");
+        let g = gap(&pts, -1.0, 0.71..3.0).expect("gap");
         assert!((g.width - 0.8).abs() < 0.05, "{g:?}");
         assert!((g.mid - DVec2::new(1.4, -1.0)).length() < 0.05, "{g:?}");
         assert!((g.normal - DVec2::new(0.0, -1.0)).length() < 1e-9, "{g:?}");
         // On the other side it is not the followed boundary's gap.
-        assert_eq!(
-            find_gap(
-                &pts,
-                DVec2::ZERO,
-                RangeNoise::default(),
-                1.0,
-                3.0,
-                1.5,
-                0.71..3.0
-            ),
-            None
-        );
+        assert_eq!(gap(&pts, 1.0, 0.71..3.0), None);
         // Narrower than the robot can turn in, or wider than the follower's circle: none.
-        assert_eq!(
-            find_gap(
-                &scan(&doorway(0.6)),
-                DVec2::ZERO,
-                RangeNoise::default(),
-                -1.0,
-                3.0,
-                1.5,
-                0.71..3.0
-            ),
-            None
-        );
-        assert_eq!(
-            find_gap(
-                &pts,
-                DVec2::ZERO,
-                RangeNoise::default(),
-                -1.0,
-                3.0,
-                1.5,
-                0.71..0.75
-            ),
-            None
-        );
+        assert_eq!(gap(&scan(&doorway(0.6)), -1.0, 0.71..3.0), None);
+        assert_eq!(gap(&pts, -1.0, 0.71..0.75), None);
         // A straight wall has no gap.
         let wall = [(DVec2::new(-5.0, -1.0), DVec2::new(8.0, -1.0))];
-        assert_eq!(
-            find_gap(
-                &scan(&wall),
-                DVec2::ZERO,
-                RangeNoise::default(),
-                -1.0,
-                3.0,
-                1.5,
-                0.71..3.0
-            ),
-            None
-        );
+        assert_eq!(gap(&scan(&wall), -1.0, 0.71..3.0), None);
     }
 
     #[test]
@@ -885,30 +830,10 @@ mod tests {
             (DVec2::new(-5.0, -1.0), DVec2::new(1.0, -1.0)),
             (DVec2::new(1.0, -2.0), DVec2::new(8.0, -2.0)),
         ];
-        assert_eq!(
-            find_gap(
-                &scan(&walls),
-                DVec2::ZERO,
-                RangeNoise::default(),
-                -1.0,
-                3.0,
-                1.5,
-                0.71..3.0
-            ),
-            None
-        );
+        assert_eq!(gap(&scan(&walls), -1.0, 0.71..3.0), None);
         // With a post 0.85 m past the end instead, seen through the open space, there is one.
         let post = [walls[0], (DVec2::new(1.85, -1.0), DVec2::new(1.85, -1.3))];
-        let g = find_gap(
-            &scan(&post),
-            DVec2::ZERO,
-            RangeNoise::default(),
-            -1.0,
-            3.0,
-            1.5,
-            0.71..3.0,
-        )
-        .expect("gap");
+        let g = gap(&scan(&post), -1.0, 0.71..3.0).expect("gap");
         assert!((g.width - 0.85).abs() < 0.05, "{g:?}");
     }
 
@@ -1096,16 +1021,7 @@ mod tests {
         watch: impl FnMut(&Passage, &Pose),
     ) -> (PassStep, Pose, f64) {
         let pts = scan(&local(walls, &start));
-        let g = find_gap(
-            &pts,
-            DVec2::ZERO,
-            RangeNoise::default(),
-            -1.0,
-            3.0,
-            1.5,
-            0.71..3.0,
-        )
-        .expect("gap");
+        let g = gap(&pts, -1.0, 0.71..3.0).expect("gap");
         drive_gap(walls, start, g.in_frame(&start), watch)
     }
 

@@ -310,7 +310,15 @@ impl SensorConfig {
 
     /// Range noise σ at `range`.
     pub fn noise_sigma(&self, range: f64) -> f64 {
-        self.range_noise_std.max(self.range_noise_rel * range)
+        self.range_noise().sigma(range)
+    }
+
+    /// The range noise model on its own (what a consumer of the returns needs of it).
+    pub fn range_noise(&self) -> RangeNoise {
+        RangeNoise {
+            std: self.range_noise_std,
+            rel: self.range_noise_rel,
+        }
     }
 
     /// Checks cross-field consistency; the message names the offending key.
@@ -389,6 +397,22 @@ impl SensorConfig {
             ));
         }
         Ok(())
+    }
+}
+
+/// A sensor's Gaussian range noise: σ = max(`std`, `rel` × range).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RangeNoise {
+    /// Least σ, m.
+    pub std: f64,
+    /// σ per metre of range.
+    pub rel: f64,
+}
+
+impl RangeNoise {
+    /// σ at `range` metres.
+    pub fn sigma(&self, range: f64) -> f64 {
+        self.std.max(self.rel * range)
     }
 }
 

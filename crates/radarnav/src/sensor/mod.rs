@@ -12,7 +12,7 @@ mod returns;
 pub mod signal;
 pub mod trace;
 
-pub use config::{MAX_RAYS, PRESETS, Preset, SensorConfig, SensorKind, preset};
+pub use config::{MAX_RAYS, PRESETS, Preset, RangeNoise, SensorConfig, SensorKind, preset};
 pub use echo::{Echo, EchoKind, RangeLaw};
 pub use signal::{ImageConfig, ReturnMode, Selection, SignalConfig};
 pub use trace::{HitKind, Return, Tracer};
