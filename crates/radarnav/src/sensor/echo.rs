@@ -443,8 +443,13 @@ fn volume_echoes(
     // Two-way decay constant of the power, 1/m.
     let k = 2.0 * alpha * LN_10 / 10.0;
     // The pieces are equally long, so each one's decay integral is the same.
-    let integral = if k > 0.0 {
-        -(-k * step).exp_m1() / k
+    let x = k * step;
+    let integral = if x > 0.125 {
+        // 1 − e⁻ˣ loses under 10⁻¹⁵ of its value to cancellation here, and libm's `exp`
+        // costs about half its `exp_m1`.
+        (1.0 - (-x).exp()) / k
+    } else if k > 0.0 {
+        -(-x).exp_m1() / k
     } else {
         step
     };

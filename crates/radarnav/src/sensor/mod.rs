@@ -193,11 +193,13 @@ fn beam_ray_toward(pose: &Pose, (s, c): (f64, f64), (se, ce): (f64, f64), latera
 }
 
 /// The sines and cosines of a scan's azimuths relative to the sensor, kept from scan to scan
-/// (a sensor's azimuths do not change): a thesis-model scan turns them by its yaw with four
-/// products per ray instead of a sine and a cosine (DESIGN §11). The turned values differ
-/// from `sin_cos(yaw + az)` ([`beam_ray`]) by a few units in the last place, far below any
-/// range's rounding. A tracer serves every sensor of a run in turn (a radar and a laser
-/// alternate), so it keeps one table per azimuth layout.
+/// (a sensor's azimuths do not change): a scan turns them by its yaw with four products per
+/// ray instead of a sine and a cosine (DESIGN §11), an echo scan one table per offset in
+/// azimuth of its beam's rays. The turned values differ from `sin_cos(yaw + az)`
+/// ([`beam_ray`]) by a few units in the last place, far below a reading's rounding to `f32`
+/// (though a hit exactly on a map cell's border may fall to its other side). A tracer serves
+/// every sensor of a run in turn (a radar and a laser alternate), so it keeps one table per
+/// azimuth layout.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Bearings {
     /// Per layout, its sines and cosines.
@@ -210,32 +212,40 @@ pub(crate) struct Bearings {
 type AzimuthLayout = (u64, u64, usize);
 
 /// Azimuth layouts a tracer keeps tables for; more are dropped and remade (a robot has a few
-/// sensors).
-const BEARING_TABLES: usize = 8;
+/// sensors, and a radar's beam one layout per ray offset in azimuth).
+const BEARING_TABLES: usize = signal::MAX_BEAM_RAYS + 8;
 
 impl Bearings {
     /// Sine and cosine of the world bearing of each of `n` azimuths `first + k * step` from a
     /// sensor at heading `yaw`.
     fn turned(&mut self, yaw: f64, first: f64, step: f64, n: usize) -> &[(f64, f64)] {
-        let key = (first.to_bits(), step.to_bits(), n);
-        let k = match self.tables.iter().position(|t| t.0 == key) {
-            Some(k) => k,
-            None => {
-                if self.tables.len() >= BEARING_TABLES {
-                    self.tables.clear();
-                }
-                let table = (0..n)
-                    .map(|k| (first + k as f64 * step).sin_cos())
-                    .collect();
-                self.tables.push((key, table));
-                self.tables.len() - 1
-            }
-        };
+        self.turned_from(yaw, &[first], step, n)
+    }
+
+    /// [`Bearings::turned`] for several first azimuths (a beam's rays off the boresight in
+    /// azimuth), one after the other: entry `j * n + k` is azimuth `firsts[j] + k * step`.
+    fn turned_from(&mut self, yaw: f64, firsts: &[f64], step: f64, n: usize) -> &[(f64, f64)] {
         let (sy, cy) = yaw.sin_cos();
         self.turned.clear();
-        self.turned.extend(
-            (self.tables[k].1.iter()).map(|&(sa, ca)| (sy * ca + cy * sa, cy * ca - sy * sa)),
-        );
+        for &first in firsts {
+            let key = (first.to_bits(), step.to_bits(), n);
+            let k = match self.tables.iter().position(|t| t.0 == key) {
+                Some(k) => k,
+                None => {
+                    if self.tables.len() >= BEARING_TABLES {
+                        self.tables.clear();
+                    }
+                    let table = (0..n)
+                        .map(|k| (first + k as f64 * step).sin_cos())
+                        .collect();
+                    self.tables.push((key, table));
+                    self.tables.len() - 1
+                }
+            };
+            self.turned.extend(
+                (self.tables[k].1.iter()).map(|&(sa, ca)| (sy * ca + cy * sa, cy * ca - sy * sa)),
+            );
+        }
         &self.turned
     }
 }
@@ -498,6 +508,18 @@ mod tests {
         }
         // Each layout's table was made once and kept.
         assert_eq!(b.tables.len(), 2);
+        // A beam's offsets in azimuth: each offset's bearings in turn, as `turned` gives them.
+        let (yaw, step, n) = (0.7, 0.0175, 360);
+        let firsts = [-0.0157, 0.0, 0.0157];
+        let all = b.turned_from(yaw, &firsts, step, n).to_vec();
+        assert_eq!(all.len(), 3 * n);
+        for (j, &first) in firsts.iter().enumerate() {
+            assert_eq!(
+                &all[j * n..(j + 1) * n],
+                b.turned(yaw, first, step, n),
+                "offset {j}"
+            );
+        }
     }
 
     /// A closed 10 × 10 m concrete room centred on the origin; inner faces at ±4.9 m.

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use super::echo::{Echo, EchoKind, EchoModel};
 use super::signal::{BeamRay, ReturnMode, Selection};
 use super::{
-    Beam, HitKind, PARALLEL_CHUNK, Scan, ScanDraws, SensorConfig, Tracer, beam_ray,
+    Beam, HitKind, PARALLEL_CHUNK, Scan, ScanDraws, SensorConfig, Tracer, beam_ray_toward,
     with_pool_tracer,
 };
 use crate::pose::Pose;
@@ -37,6 +37,23 @@ impl SensorConfig {
         let planes: Vec<Vec<(f64, f64)>> = (self.elevations.iter())
             .map(|el| beam.iter().map(|b| (el + b.d_el).sin_cos()).collect())
             .collect();
+        // Per beam ray, the world bearings of its azimuths: one table per distinct offset in
+        // azimuth, turned by the yaw (four products a ray instead of a sine and a cosine).
+        let mut offsets: Vec<f64> = Vec::new();
+        let table_of: Vec<usize> = (beam.iter())
+            .map(
+                |b| match offsets.iter().position(|o| o.to_bits() == b.d_az.to_bits()) {
+                    Some(j) => j,
+                    None => {
+                        offsets.push(b.d_az);
+                        offsets.len() - 1
+                    }
+                },
+            )
+            .collect();
+        let firsts: Vec<f64> = offsets.iter().map(|o| angle_min + o).collect();
+        let mut bearings = std::mem::take(&mut tracer.bearings);
+        let toward = bearings.turned_from(pose.yaw, &firsts, self.resolution, azimuths);
         let sig = &self.signal;
         // A selection that does not look at the echoes (one ray; `uniform`, drawn before the
         // walk) is made first, and only the answering ray is walked: the others' echoes would
@@ -62,6 +79,9 @@ impl SensorConfig {
             beam: &beam,
             model: &model,
             fixed,
+            toward,
+            table_of: &table_of,
+            azimuths,
         };
         // Azimuth `i` is azimuth `k` of plane `plane` (counted, not divided, where serial).
         let answer = |tracer: &mut Tracer, i: usize, plane: usize, k: usize, out: &mut Scan| {
@@ -69,7 +89,7 @@ impl SensorConfig {
             let el = &planes[plane];
             let select = draws.1.get(i).copied();
             let (side, noise) = draws.0[i];
-            self.answer(&shared, az, el, side, select, noise, tracer, out)
+            self.answer(&shared, (k, az), el, side, select, noise, tracer, out)
         };
         let mut out = self.empty_scan(pose, stamp);
         let all = self.signal.return_mode == ReturnMode::All;
@@ -117,20 +137,21 @@ impl SensorConfig {
             }
         }
         tracer.fan = fan;
+        tracer.bearings = bearings;
         if all {
             out.echo_start.push(out.echoes.len() as u32);
         }
         out
     }
 
-    /// Walks every beam ray of one azimuth, picks the answering ray and files its reading
-    /// (range with `noise`, hit kind, material, beam) in `out`; in `all` mode also the echoes
-    /// it reports.
+    /// Walks every beam ray of azimuth `k` (`az` rad off the sensor's axis), picks the
+    /// answering ray and files its reading (range with `noise`, hit kind, material, beam) in
+    /// `out`; in `all` mode also the echoes it reports.
     #[allow(clippy::too_many_arguments)]
     fn answer(
         &self,
         scan: &EchoScan,
-        az: f64,
+        (k, az): (usize, f64),
         el_sin_cos: &[(f64, f64)],
         side: Beam,
         select: Option<f64>,
@@ -145,6 +166,9 @@ impl SensorConfig {
             beam,
             model,
             fixed,
+            toward,
+            table_of,
+            azimuths,
         } = scan;
         let sig = &self.signal;
         // The tracer's buffers: the echo walk's, and per beam ray where its echoes start in
@@ -174,7 +198,8 @@ impl SensorConfig {
         // cosine at its first surface.
         let mut walk = |r: usize, buf: &mut Vec<Echo>| {
             let (b, start) = (&beam[r], buf.len());
-            let ray = beam_ray(pose, az + b.d_az, el_sin_cos[r], b.lateral);
+            let bearing = toward[table_of[r] * azimuths + k];
+            let ray = beam_ray_toward(pose, bearing, el_sin_cos[r], b.lateral);
             let (w, max) = (b.weight, self.range_max);
             let cos = match fan {
                 Some(fan) => {
@@ -297,6 +322,13 @@ struct EchoScan<'a> {
     model: &'a EchoModel,
     /// Whether the answering ray is chosen before the walk (one ray, or `uniform`).
     fixed: bool,
+    /// World bearings (sine, cosine): beam ray `r`'s at azimuth `k` is
+    /// `toward[table_of[r] * azimuths + k]`.
+    toward: &'a [(f64, f64)],
+    /// Per beam ray, its table in `toward`.
+    table_of: &'a [usize],
+    /// Azimuths per table.
+    azimuths: usize,
 }
 
 /// An echo as a hit kind: the surface of a material the radar cannot enter is `solid`, any
@@ -315,6 +347,7 @@ fn hit_kind(e: &Echo, materials: &MaterialTable) -> HitKind {
 
 #[cfg(test)]
 mod tests {
+    use crate::sensor::beam_ray;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -483,7 +516,18 @@ mod tests {
             alone.retain(|e| e.power_db >= c.signal.detection_threshold_db);
             alone.sort_by(|a, b| a.range.total_cmp(&b.range));
             alone.truncate(c.signal.max_echoes);
-            assert_eq!(s.echoes_of(i), &alone[..], "azimuth {i}");
+            // The scan turns a table of its bearings by the yaw, so its ray's direction
+            // differs from `beam_ray`'s by a few ulps: the same echoes, to rounding.
+            let same = |a: &Echo, b: &Echo| {
+                (a.range - b.range).abs() < 1e-9
+                    && (a.power_db - b.power_db).abs() < 1e-9
+                    && (a.material, a.kind, a.bounces) == (b.material, b.kind, b.bounces)
+            };
+            let got = s.echoes_of(i);
+            assert!(
+                got.len() == alone.len() && got.iter().zip(&alone).all(|(a, b)| same(a, b)),
+                "azimuth {i}: {got:?} against {alone:?}"
+            );
             sides.insert(s.beams[i].as_str());
             echoes += alone.len();
         }

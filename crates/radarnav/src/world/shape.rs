@@ -490,7 +490,9 @@ impl Shape {
             v.try_normalize().unwrap_or(DVec3::X)
         };
         match self {
-            Self::Sphere { center, .. } => (p - *center).try_normalize().unwrap_or(DVec3::Z),
+            // On the surface |p − centre| is the radius (to rounding): one division, where
+            // normalising takes a square root as well.
+            Self::Sphere { center, radius } => (p - *center) / *radius,
             Self::Box(b) => b.face_at(p).1,
             Self::Cylinder {
                 center,
