@@ -157,10 +157,10 @@ impl Tracer {
             // Nothing to spend a budget in: the ray ends at its first solid entry, exactly
             // where the walk below would end it.
             match world.first_solid(fan, ray, reach, band, &mut self.query) {
-                Some(iv) if iv.t_in.max(0.0) < reach => Return {
-                    range: iv.t_in.max(0.0),
+                Some((t_in, material)) if t_in.max(0.0) < reach => Return {
+                    range: t_in.max(0.0),
                     kind: HitKind::Solid,
-                    material: Some(iv.material),
+                    material: Some(material),
                 },
                 _ => Return::NONE,
             }

@@ -75,7 +75,24 @@ fn entry_order(a: &Interval, b: &Interval) -> Ordering {
 }
 
 /// Files `iv` in a pending list sorted last-first (the next interval at the end).
-fn insert_pending(pending: &mut Vec<Interval>, iv: Interval) {
+/// Takes the interval's fields one by one (see [`World::test_part`]), and is never inlined,
+/// so that its callers stay small enough to be inlined themselves.
+#[inline(never)]
+fn insert_pending(
+    pending: &mut Vec<Interval>,
+    t_in: f64,
+    t_out: f64,
+    object: u32,
+    material: MaterialId,
+    segment: u16,
+) {
+    let iv = Interval {
+        t_in,
+        t_out,
+        object,
+        material,
+        segment,
+    };
     let at = pending.partition_point(|p| entry_order(p, &iv) == Ordering::Greater);
     pending.insert(at, iv);
 }
@@ -540,7 +557,19 @@ impl World {
     #[inline(always)]
     fn test_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
         let pending = &mut q.intervals;
-        let take = |iv: Interval| insert_pending(pending, iv);
+        // The interval goes on field by field, in registers: handed over whole, it went
+        // through memory, its fields written one by one and read back sixteen bytes at a time,
+        // which stalls the store buffer at every interval found.
+        let take = |iv: Interval| {
+            insert_pending(
+                pending,
+                iv.t_in,
+                iv.t_out,
+                iv.object,
+                iv.material,
+                iv.segment,
+            );
+        };
         self.test_part_with(
             part,
             ray,
@@ -646,12 +675,15 @@ impl World {
         self.binary & band_bit(band) != 0
     }
 
-    /// The first interval, in entry order, of an object solid to `band` that `ray` meets
-    /// before `t_max`: the interval a walk of [`World::ordered_intervals`] stops at when every
-    /// other object is transparent to `band` ([`World::is_binary`]). Through `fan` (its
-    /// origin the ray's, with the ray's bearing) when given, else along the grid. Objects
-    /// transparent to `band` are not tested at all. A mesh's exit is not looked for: its
-    /// interval's `t_out` is then a point inside it.
+    /// The entry distance and material of the first interval, in entry order, of an object
+    /// solid to `band` that `ray` meets before `t_max`: the interval a walk of
+    /// [`World::ordered_intervals`] stops at when every other object is transparent to `band`
+    /// ([`World::is_binary`]). Through `fan` (its origin the ray's, with the ray's bearing)
+    /// when given, else along the grid. Objects transparent to `band` are not tested at all.
+    ///
+    /// Only those two fields are returned: the whole interval, its fields stored one by one
+    /// while the search ran, was copied out sixteen bytes at a time, which stalls the store
+    /// buffer once per ray (a twentieth of a whole run).
     pub fn first_solid(
         &self,
         fan: Option<(&Fan, f64)>,
@@ -659,7 +691,7 @@ impl World {
         t_max: f64,
         band: Band,
         q: &mut RayQuery,
-    ) -> Option<Interval> {
+    ) -> Option<(f64, MaterialId)> {
         self.start_ray(ray, q);
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
@@ -719,7 +751,7 @@ impl World {
                 }
             }
         }
-        best
+        best.map(|b| (b.t_in, b.material))
     }
 
     /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`:
