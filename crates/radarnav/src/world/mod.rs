@@ -74,9 +74,9 @@ fn entry_order(a: &Interval, b: &Interval) -> Ordering {
         .then(a.t_out.total_cmp(&b.t_out))
 }
 
-/// Files `iv` in a pending list sorted last-first (the next interval at the end).
-/// Takes the interval's fields one by one (see [`World::test_part`]), and is never inlined,
-/// so that its callers stay small enough to be inlined themselves.
+/// Files the interval of these fields in a pending list sorted last-first (the next interval
+/// at the end). It takes the fields one by one (see [`World::test_part`]) and is never
+/// inlined, so that its callers stay small enough to be inlined themselves.
 #[inline(never)]
 fn insert_pending(
     pending: &mut Vec<Interval>,
