@@ -155,6 +155,19 @@ pub struct EchoTracer {
     legs: Vec<Leg>,
 }
 
+/// The smaller of two distances along a ray, which are never NaN: a bare compare and select,
+/// where `f64::min` adds a NaN fix-up to every step of the walk's critical path.
+#[inline(always)]
+fn nearer(a: f64, b: f64) -> f64 {
+    if b < a { b } else { a }
+}
+
+/// The larger of two never-NaN values (see [`nearer`]).
+#[inline(always)]
+fn farther(a: f64, b: f64) -> f64 {
+    if b > a { b } else { a }
+}
+
 /// Ten to the power `db / 10`.
 fn from_db(db: f64) -> f64 {
     (db * (LN_10 / 10.0)).exp()
@@ -282,14 +295,14 @@ impl EchoTracer {
             let eta: f64 = active.iter().map(|a| a.2).sum();
             // Where the two-way loss reaches the dynamic range: nothing beyond matters.
             let horizon = if alpha > 0.0 {
-                t + ((model.dynamic_range_db / 2.0 - loss) / alpha).max(0.0)
+                t + farther((model.dynamic_range_db / 2.0 - loss) / alpha, 0.0)
             } else {
                 f64::INFINITY
             };
-            let entry = intervals.peek(t_exit.min(reach).min(horizon));
-            let t_entry = entry.map_or(f64::INFINITY, |iv| iv.t_in.max(0.0));
-            let t_next = t_entry.min(t_exit).min(reach);
-            let t_end = t_next.min(horizon);
+            let entry = intervals.peek(nearer(nearer(t_exit, reach), horizon));
+            let t_entry = entry.map_or(f64::INFINITY, |iv| farther(iv.t_in, 0.0));
+            let t_next = nearer(nearer(t_entry, t_exit), reach);
+            let t_end = nearer(t_next, horizon);
             if eta > 0.0 && t_end > t {
                 let scatterer = active
                     .iter()
@@ -375,19 +388,13 @@ fn surface_echo(
     emit: &mut impl FnMut(Echo),
 ) -> (f64, Option<Leg>) {
     let d = leg.ray.dir;
-    let cos = d.dot(normal).abs().min(1.0);
+    let cos = nearer(1.0, d.dot(normal).abs());
     let rho = m.radar_reflectivity;
     if rho <= 0.0 {
         return (cos, None);
     }
-    // A specular surface's echo: its lobe around the normal, plus the diffuse share's echo at
-    // any angle (with no diffuse share exactly the lobe: 1·x + 0 = x).
-    let diffuse = m.radar_diffuse;
     let gain = if m.specular {
-        let theta = cos.acos();
-        let x = theta / m.specular_lobe;
-        let lobe = (-4.0 * std::f64::consts::LN_2 * x * x).exp();
-        (1.0 - diffuse) * lobe + diffuse * cos
+        specular_gain(cos, m)
     } else {
         cos
     };
@@ -404,26 +411,46 @@ fn surface_echo(
             bounces: leg.bounces,
         });
     }
-    let bounce = (m.specular && leg.bounces < model.max_bounces && leg.t_max > t).then(|| {
-        // Mirrored about the surface, facing away from it.
-        let n = if d.dot(normal) < 0.0 { normal } else { -normal };
-        let dir = d - 2.0 * d.dot(n) * n;
-        Leg {
-            ray: Ray {
-                origin: leg.ray.at(t) + n * 1e-6,
-                dir,
-            },
-            path: range,
-            // What the diffuse share scatters is not mirrored.
-            loss_db: loss - to_db(rho * (1.0 - diffuse)),
-            bounces: leg.bounces + 1,
-            t_max: leg.t_max - t,
-        }
-    });
+    let bounce = (m.specular && leg.bounces < model.max_bounces && leg.t_max > t)
+        .then(|| mirrored_leg(leg, normal, t, loss, m));
     (
         cos,
         bounce.filter(|b| 2.0 * b.loss_db < model.dynamic_range_db),
     )
+}
+
+/// A specular surface's echo gain at incidence cosine `cos`: its lobe around the normal, plus
+/// the diffuse share's echo at any angle (with no diffuse share exactly the lobe: 1·x + 0 = x).
+/// Out of line, as the bounce below: few surfaces are specular, and the walk's loop keeps more
+/// in registers without them.
+#[inline(never)]
+fn specular_gain(cos: f64, m: &crate::world::Material) -> f64 {
+    let diffuse = m.radar_diffuse;
+    let theta = cos.acos();
+    let x = theta / m.specular_lobe;
+    let lobe = (-4.0 * std::f64::consts::LN_2 * x * x).exp();
+    (1.0 - diffuse) * lobe + diffuse * cos
+}
+
+/// The leg mirrored off specular material `m` where `leg` meets it at distance `t` (outward
+/// normal `normal`, one-way loss so far `loss`).
+#[inline(never)]
+fn mirrored_leg(leg: &Leg, normal: DVec3, t: f64, loss: f64, m: &crate::world::Material) -> Leg {
+    let d = leg.ray.dir;
+    // Mirrored about the surface, facing away from it.
+    let n = if d.dot(normal) < 0.0 { normal } else { -normal };
+    let dir = d - 2.0 * d.dot(n) * n;
+    Leg {
+        ray: Ray {
+            origin: leg.ray.at(t) + n * 1e-6,
+            dir,
+        },
+        path: leg.path + t,
+        // What the diffuse share scatters is not mirrored.
+        loss_db: loss - to_db(m.radar_reflectivity * (1.0 - m.radar_diffuse)),
+        bounces: leg.bounces + 1,
+        t_max: leg.t_max - t,
+    }
 }
 
 /// The volume echoes of the stretch `[t0, t1]` of `leg` inside scatterers of total η

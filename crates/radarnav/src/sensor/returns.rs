@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::echo::{Echo, EchoKind, EchoModel};
+use super::echo::{Echo, EchoKind, EchoModel, EchoTracer};
 use super::signal::{BeamRay, ReturnMode, Selection};
 use super::{
     Beam, HitKind, PARALLEL_CHUNK, Scan, ScanDraws, SensorConfig, Tracer, beam_ray_toward,
@@ -82,6 +82,7 @@ impl SensorConfig {
             toward,
             table_of: &table_of,
             azimuths,
+            range_max: self.range_max,
         };
         // Azimuth `i` is azimuth `k` of plane `plane` (counted, not divided, where serial).
         let answer = |tracer: &mut Tracer, i: usize, plane: usize, k: usize, out: &mut Scan| {
@@ -159,17 +160,7 @@ impl SensorConfig {
         tracer: &mut Tracer,
         out: &mut Scan,
     ) {
-        let &EchoScan {
-            world,
-            fan,
-            pose,
-            beam,
-            model,
-            fixed,
-            toward,
-            table_of,
-            azimuths,
-        } = scan;
+        let (world, beam) = (scan.world, scan.beam);
         let sig = &self.signal;
         // The tracer's buffers: the echo walk's, and per beam ray where its echoes start in
         // `echoes` and its first incidence cosine.
@@ -184,7 +175,7 @@ impl SensorConfig {
         let rays = beam.len();
         // The answering ray, where the selection is made before the walk.
         let answering = match select {
-            _ if !fixed => None,
+            _ if !scan.fixed => None,
             _ if rays == 1 => Some(0),
             Some(u) => Some(((u * rays as f64) as usize).min(rays - 1)),
             None => Some(match side {
@@ -194,27 +185,9 @@ impl SensorConfig {
             }),
         };
         let all = sig.return_mode == ReturnMode::All;
-        // Walks beam ray `r`, appending its echoes to `buf` by range; returns the incidence
-        // cosine at its first surface.
-        let mut walk = |r: usize, buf: &mut Vec<Echo>| {
-            let (b, start) = (&beam[r], buf.len());
-            let bearing = toward[table_of[r] * azimuths + k];
-            let ray = beam_ray_toward(pose, bearing, el_sin_cos[r], b.lateral);
-            let (w, max) = (b.weight, self.range_max);
-            let cos = match fan {
-                Some(fan) => {
-                    let heading = pose.yaw + az + b.d_az;
-                    echo.echoes_in_fan(world, fan, heading, &ray, w, max, model, buf)
-                }
-                None => echo.echoes(world, &ray, w, max, model, buf),
-            };
-            // A leg's echoes come in range order, a ghost's after them.
-            let mine = &mut buf[start..];
-            if !mine.is_sorted_by(|a, b| a.range <= b.range) {
-                mine.sort_by(|a, b| a.range.total_cmp(&b.range));
-            }
-            cos
-        };
+        // Walks beam ray `r` of this azimuth into `buf` (a plain call: a closure over the
+        // scan's dozen fields stored a pointer to each of them per azimuth).
+        let mut walk = |r: usize, buf: &mut Vec<Echo>| scan.walk(echo, r, (k, az), el_sin_cos, buf);
         let (chosen, reading, reported) = match answering {
             // Only the answering ray is walked, in `all` mode straight into the scan's buffer.
             Some(chosen) if all => {
@@ -311,6 +284,38 @@ impl SensorConfig {
     }
 }
 
+impl EchoScan<'_> {
+    /// Walks beam ray `r` of azimuth `k` (`az` rad off the sensor's axis; planes' elevations
+    /// `el_sin_cos`), appending its echoes to `buf` by range; returns the incidence cosine at
+    /// its first surface.
+    fn walk(
+        &self,
+        echo: &mut EchoTracer,
+        r: usize,
+        (k, az): (usize, f64),
+        el_sin_cos: &[(f64, f64)],
+        buf: &mut Vec<Echo>,
+    ) -> f64 {
+        let (b, start) = (&self.beam[r], buf.len());
+        let bearing = self.toward[self.table_of[r] * self.azimuths + k];
+        let ray = beam_ray_toward(self.pose, bearing, el_sin_cos[r], b.lateral);
+        let (w, max, model) = (b.weight, self.range_max, self.model);
+        let cos = match self.fan {
+            Some(fan) => {
+                let heading = self.pose.yaw + az + b.d_az;
+                echo.echoes_in_fan(self.world, fan, heading, &ray, w, max, model, buf)
+            }
+            None => echo.echoes(self.world, &ray, w, max, model, buf),
+        };
+        // A leg's echoes come in range order, a ghost's after them.
+        let mine = &mut buf[start..];
+        if !mine.is_sorted_by(|a, b| a.range <= b.range) {
+            mine.sort_by(|a, b| a.range.total_cmp(&b.range));
+        }
+        cos
+    }
+}
+
 /// What every azimuth of one echo scan shares.
 struct EchoScan<'a> {
     world: &'a World,
@@ -329,6 +334,8 @@ struct EchoScan<'a> {
     table_of: &'a [usize],
     /// Azimuths per table.
     azimuths: usize,
+    /// The sensor's range, m: how far each ray is walked.
+    range_max: f64,
 }
 
 /// An echo as a hit kind: the surface of a material the radar cannot enter is `solid`, any
