@@ -44,7 +44,7 @@ pub fn write_signal_outputs(
                     el.to_degrees(),
                     e.range,
                     e.depth,
-                    e.power_db,
+                    e.power_db(),
                     materials.get(usize::from(e.material.0)).unwrap_or(&"?"),
                     e.kind.as_str(),
                     e.bounces

@@ -138,7 +138,7 @@ fn ascope(
         .collect();
     let top = echoes
         .iter()
-        .map(|e| e.power_db)
+        .map(|e| e.power_db())
         .chain(row.iter().map(|p| p.1))
         .fold(f64::MIN, f64::max)
         + 5.0;
@@ -180,7 +180,7 @@ fn ascope(
                 echoes
                     .iter()
                     .filter(|e| e.kind == EchoKind::Surface)
-                    .map(|e| Circle::new((e.range, e.power_db), 5, red.filled())),
+                    .map(|e| Circle::new((e.range, e.power_db()), 5, red.filled())),
             )
             .map_err(draw_err)?
             .label("surface echo (one beam ray)")
@@ -190,7 +190,9 @@ fn ascope(
                 echoes
                     .iter()
                     .filter(|e| e.kind == EchoKind::Volume)
-                    .map(|e| TriangleMarker::new((e.range + e.depth / 2.0, e.power_db), 6, green)),
+                    .map(|e| {
+                        TriangleMarker::new((e.range + e.depth / 2.0, e.power_db()), 6, green)
+                    }),
             )
             .map_err(draw_err)?
             .label("volume echo inside foliage (per piece)")
@@ -214,9 +216,9 @@ fn ascope(
             Some(g) => {
                 g.1 += 1;
                 g.3 = g.3.max(e.range + e.depth);
-                g.4 = g.4.max(e.power_db);
+                g.4 = g.4.max(e.power_db());
             }
-            None => groups.push((e.material.0, 1, e.range, e.range + e.depth, e.power_db)),
+            None => groups.push((e.material.0, 1, e.range, e.range + e.depth, e.power_db())),
         }
     }
     let mut list = String::new();

@@ -564,7 +564,7 @@ impl PySim {
         d.set_item("hits", PyArray1::from_vec(py, hits))?;
         if !s.echoes.is_empty() {
             let r: Vec<f64> = s.echoes.iter().map(|e| e.range).collect();
-            let p: Vec<f64> = s.echoes.iter().map(|e| e.power_db).collect();
+            let p: Vec<f64> = s.echoes.iter().map(|e| e.power_db()).collect();
             d.set_item("echo_ranges", PyArray1::from_vec(py, r))?;
             d.set_item("echo_powers_db", PyArray1::from_vec(py, p))?;
             d.set_item("echo_start", PyArray1::from_vec(py, s.echo_start))?;

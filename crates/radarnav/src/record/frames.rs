@@ -98,7 +98,7 @@ pub fn echo_points(scan: &Scan) -> (Vec<u8>, usize) {
         let ray = beam_ray(&sensor, az, el.sin_cos(), 0.0);
         for e in scan.echoes_of(i) {
             let p = ray.at(e.range);
-            for v in [p.x, p.y, p.z, e.power_db] {
+            for v in [p.x, p.y, p.z, e.power_db()] {
                 data.extend_from_slice(&(v as f32).to_le_bytes());
             }
             data.push(match e.kind {

@@ -191,7 +191,7 @@ impl<W: Write> ScanLogWriter<W> {
                 for e in echoes {
                     b.extend_from_slice(&(e.range as f32).to_le_bytes());
                     b.extend_from_slice(&(e.depth as f32).to_le_bytes());
-                    b.extend_from_slice(&(e.power_db as f32).to_le_bytes());
+                    b.extend_from_slice(&(e.power_db() as f32).to_le_bytes());
                     b.extend_from_slice(&e.material.0.to_le_bytes());
                     b.push(match e.kind {
                         EchoKind::Surface => 0,
@@ -375,7 +375,7 @@ fn read_echoes(
                 range: f32_at(at),
                 depth: f32_at(at + 4),
                 decay_db_per_m: 0.0,
-                power_db: f32_at(at + 8),
+                power: crate::sensor::echo::from_db(f32_at(at + 8)),
                 material: MaterialId(u16::from_le_bytes([block[at + 12], block[at + 13]])),
                 kind,
                 bounces: block[at + 15],
@@ -433,8 +433,8 @@ mod tests {
             assert_eq!(a.echo_start, b.echo_start);
             for (x, y) in a.echoes.iter().zip(&b.echoes) {
                 assert_eq!(
-                    (x.range as f32, x.power_db as f32),
-                    (y.range as f32, y.power_db as f32)
+                    (x.range as f32, x.power_db() as f32),
+                    (y.range as f32, y.power_db() as f32)
                 );
                 assert_eq!(
                     (x.material, x.kind, x.bounces),

@@ -8,9 +8,11 @@
 //! solid, at `t_max`, or as soon as the two-way loss has used the dynamic range: nothing behind
 //! that point could rise above the noise floor, and no work is done for it.
 //!
-//! Power is in dB relative to a reflector of ρ = 1 at normal incidence and 1 m under the same
-//! range law, so 0 dB is the strongest echo a range of 1 m or more can give. An echo weaker than
-//! `−dynamic_range_db` is dropped.
+//! Power is relative to a reflector of ρ = 1 at normal incidence and 1 m under the same range
+//! law, so 1 (0 dB) is the strongest echo a range of 1 m or more can give. The walk keeps it
+//! linear, as products of reflectivity, incidence, range law and the two-way transmission so
+//! far, and files, reads and draws it in dB ([`Echo::power_db`]): a logarithm per echo was a
+//! tenth of a multi-echo scan. An echo weaker than `−dynamic_range_db` is dropped.
 
 use std::f64::consts::LN_10;
 
@@ -86,14 +88,28 @@ pub struct Echo {
     pub depth: f64,
     /// Two-way decay of a volume echo's power density along its depth, dB/m.
     pub decay_db_per_m: f64,
-    /// Power, dB relative to a ρ = 1 reflector at normal incidence and 1 m.
-    pub power_db: f64,
+    /// Power, linear, relative to a ρ = 1 reflector at normal incidence and 1 m (files carry
+    /// it in dB, as `power_db`).
+    #[serde(rename = "power_db", serialize_with = "serialize_db")]
+    pub power: f64,
     /// The material that made it.
     pub material: MaterialId,
     /// Surface or volume.
     pub kind: EchoKind,
     /// Specular bounces before it (0 = a direct echo; more = a ghost).
     pub bounces: u8,
+}
+
+impl Echo {
+    /// The echo's power in dB relative to a ρ = 1 reflector at normal incidence and 1 m.
+    pub fn power_db(&self) -> f64 {
+        to_db(self.power)
+    }
+}
+
+/// Writes a linear power as its dB.
+fn serialize_db<S: serde::Serializer>(power: &f64, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(to_db(*power))
 }
 
 /// What the echo walk needs of a sensor.
@@ -115,18 +131,48 @@ pub struct EchoModel {
     pub wanted: Option<(usize, f64)>,
 }
 
-/// Whether `found` (one ray's echoes so far) holds `wanted`'s echoes within range `upto`:
-/// then nothing the ray meets further on can be among the first `n`.
-fn have_wanted(found: &[Echo], upto: f64, wanted: Option<(usize, f64)>) -> bool {
-    let Some((n, threshold)) = wanted else {
-        return false;
-    };
+/// Whether `found` (one ray's echoes so far) holds the first `n` echoes of power at least
+/// `threshold` (linear) within range `upto`: then nothing the ray meets further on can be
+/// among them.
+fn have_wanted(found: &[Echo], upto: f64, (n, threshold): (usize, f64)) -> bool {
     found.len() >= n
         && found
             .iter()
-            .filter(|e| e.power_db >= threshold && e.range <= upto)
+            .filter(|e| e.power >= threshold && e.range <= upto)
             .count()
             >= n
+}
+
+/// An [`EchoModel`]'s power thresholds as linear powers: the floor below which echoes are
+/// dropped, and `wanted`'s. Made once per model, not per ray (each is an `exp`).
+#[derive(Clone, Copy, Debug)]
+struct Floors {
+    /// The bits of the model's `min_power_db`, `dynamic_range_db` and `wanted`.
+    key: [u64; 4],
+    floor: f64,
+    wanted: Option<(usize, f64)>,
+}
+
+impl Floors {
+    fn key(model: &EchoModel) -> [u64; 4] {
+        let (n, t) = model
+            .wanted
+            .map_or((u64::MAX, 0), |(n, t)| (n as u64, t.to_bits()));
+        [
+            model.min_power_db.to_bits(),
+            model.dynamic_range_db.to_bits(),
+            n,
+            t,
+        ]
+    }
+
+    fn of(model: &EchoModel) -> Self {
+        Self {
+            key: Self::key(model),
+            floor: from_db(model.min_power_db.max(-model.dynamic_range_db)),
+            wanted: model.wanted.map(|(n, t)| (n, from_db(t))),
+        }
+    }
 }
 
 /// A volume echo is cut into pieces of at most this depth, m, so that the range law, taken at
@@ -139,8 +185,10 @@ struct Leg {
     ray: Ray,
     /// Path already travelled to the ray's origin, m (one way).
     path: f64,
-    /// One-way loss already suffered, dB.
+    /// One-way loss already suffered, dB: what the walk's stops look at.
     loss_db: f64,
+    /// The same loss as a two-way power factor: what echoes are multiplied by.
+    two_way: f64,
     bounces: u8,
     /// Path left within range, m.
     t_max: f64,
@@ -153,6 +201,8 @@ pub struct EchoTracer {
     /// Volumes the ray is inside: (exit, dB/m, η, material).
     active: Vec<(f64, f64, f64, MaterialId)>,
     legs: Vec<Leg>,
+    /// The last model's thresholds.
+    floors: Option<Floors>,
 }
 
 /// The smaller of two distances along a ray, which are never NaN: a bare compare and select,
@@ -168,8 +218,8 @@ fn farther(a: f64, b: f64) -> f64 {
     if b > a { b } else { a }
 }
 
-/// Ten to the power `db / 10`.
-fn from_db(db: f64) -> f64 {
+/// Ten to the power `db / 10`: the linear power of `db`.
+pub(crate) fn from_db(db: f64) -> f64 {
     (db * (LN_10 / 10.0)).exp()
 }
 
@@ -225,12 +275,16 @@ impl EchoTracer {
         out: &mut Vec<Echo>,
     ) -> f64 {
         self.legs.clear();
+        if self.floors.is_none_or(|f| f.key != Floors::key(model)) {
+            self.floors = Some(Floors::of(model));
+        }
         let start = out.len();
         let direct = Leg {
             ray: *ray,
             path: 0.0,
             // A beam of one ray weighs 1: −0 dB (as `-to_db(1.0)` gives) without the log.
             loss_db: if weight == 1.0 { -0.0 } else { -to_db(weight) },
+            two_way: weight * weight,
             bounces: 0,
             t_max,
         };
@@ -254,7 +308,9 @@ impl EchoTracer {
         out: &mut Vec<Echo>,
     ) -> Option<f64> {
         let ray = &leg.ray;
-        let floor = model.min_power_db.max(-model.dynamic_range_db);
+        let Some(Floors { floor, wanted, .. }) = self.floors else {
+            unreachable!("echoes_from makes the floors first");
+        };
         // The ground plane z = 0 is a solid under every world.
         let t_ground = if ray.dir.z < 0.0 {
             (-ray.origin.z / ray.dir.z).max(0.0)
@@ -271,18 +327,20 @@ impl EchoTracer {
         };
         let active = &mut self.active;
         active.clear();
-        let mut loss = leg.loss_db;
+        let (mut loss, mut two_way) = (leg.loss_db, leg.two_way);
         let mut t = 0.0;
         let mut first_cos = None;
         let emit = |out: &mut Vec<Echo>, e: Echo| {
-            if e.power_db >= floor {
+            if e.power >= floor {
                 out.push(e);
             }
         };
         loop {
             // Echoes are found in range order along a leg, and a mirrored leg's lie beyond
             // its bounce: past the wanted ones, the walk is over.
-            if have_wanted(&out[start..], leg.path + t, model.wanted) {
+            if let Some(wanted) = wanted
+                && have_wanted(&out[start..], leg.path + t, wanted)
+            {
                 return first_cos;
             }
             let (exit_slot, t_exit) = active
@@ -309,10 +367,12 @@ impl EchoTracer {
                     .max_by(|a, b| a.2.total_cmp(&b.2))
                     .map(|a| a.3);
                 if let Some(material) = scatterer {
-                    volume_echoes((t, t_end), (loss, alpha, eta), leg, material, model, |e| {
-                        emit(out, e)
-                    });
+                    let strength = (two_way, alpha, eta);
+                    two_way =
+                        volume_echoes((t, t_end), strength, leg, material, model, |e| emit(out, e));
                 }
+            } else if alpha > 0.0 && t_end > t {
+                two_way *= (-two_way_decay(alpha) * (t_end - t)).exp();
             }
             if alpha > 0.0 {
                 loss += alpha * (t_end - t);
@@ -327,7 +387,7 @@ impl EchoTracer {
                         leg,
                         DVec3::Z,
                         t,
-                        loss,
+                        (loss, two_way),
                         materials.get(world.ground_material()),
                         world.ground_material(),
                         model,
@@ -345,15 +405,18 @@ impl EchoTracer {
                     if iv.t_in > 0.0 {
                         let p = ray.at(t);
                         let normal = world.normal_at(&iv, p);
+                        let at = (loss, two_way);
                         let (cos, bounce) =
-                            surface_echo(leg, normal, t, loss, m, iv.material, model, &mut |e| {
+                            surface_echo(leg, normal, t, at, m, iv.material, model, &mut |e| {
                                 emit(out, e)
                             });
                         first_cos.get_or_insert(cos);
                         if let Some(b) = bounce {
                             self.legs.push(b);
                         }
-                        loss += world.radar_transmission_db(iv.material);
+                        let (db, factor) = world.radar_transmission(iv.material);
+                        loss += db;
+                        two_way *= factor;
                         if m.radar_reflectivity >= 1.0 {
                             return first_cos; // all reflected: nothing goes in
                         }
@@ -374,14 +437,14 @@ impl EchoTracer {
 }
 
 /// The surface echo where `leg` enters material `m` at distance `t` (outward normal
-/// `normal`, one-way loss so far `loss`), and the mirrored leg of a specular surface. Returns
-/// the incidence cosine and that leg.
+/// `normal`; one-way loss so far `loss`, dB, that is the two-way power factor `two_way`), and
+/// the mirrored leg of a specular surface. Returns the incidence cosine and that leg.
 #[allow(clippy::too_many_arguments)]
 fn surface_echo(
     leg: &Leg,
     normal: DVec3,
     t: f64,
-    loss: f64,
+    (loss, two_way): (f64, f64),
     m: &crate::world::Material,
     material: MaterialId,
     model: &EchoModel,
@@ -404,15 +467,14 @@ fn surface_echo(
             range,
             depth: 0.0,
             decay_db_per_m: 0.0,
-            // One logarithm for the product rather than one per factor.
-            power_db: to_db(rho * gain * model.range_law.gain(range)) - 2.0 * loss,
+            power: rho * gain * model.range_law.gain(range) * two_way,
             material,
             kind: EchoKind::Surface,
             bounces: leg.bounces,
         });
     }
     let bounce = (m.specular && leg.bounces < model.max_bounces && leg.t_max > t)
-        .then(|| mirrored_leg(leg, normal, t, loss, m));
+        .then(|| mirrored_leg(leg, normal, t, (loss, two_way), m));
     (
         cos,
         bounce.filter(|b| 2.0 * b.loss_db < model.dynamic_range_db),
@@ -433,10 +495,18 @@ fn specular_gain(cos: f64, m: &crate::world::Material) -> f64 {
 }
 
 /// The leg mirrored off specular material `m` where `leg` meets it at distance `t` (outward
-/// normal `normal`, one-way loss so far `loss`).
+/// normal `normal`; one-way loss so far `loss`, dB, that is the two-way factor `two_way`).
 #[inline(never)]
-fn mirrored_leg(leg: &Leg, normal: DVec3, t: f64, loss: f64, m: &crate::world::Material) -> Leg {
+fn mirrored_leg(
+    leg: &Leg,
+    normal: DVec3,
+    t: f64,
+    (loss, two_way): (f64, f64),
+    m: &crate::world::Material,
+) -> Leg {
     let d = leg.ray.dir;
+    // What the diffuse share scatters is not mirrored.
+    let mirrored = m.radar_reflectivity * (1.0 - m.radar_diffuse);
     // Mirrored about the surface, facing away from it.
     let n = if d.dot(normal) < 0.0 { normal } else { -normal };
     let dir = d - 2.0 * d.dot(n) * n;
@@ -446,59 +516,65 @@ fn mirrored_leg(leg: &Leg, normal: DVec3, t: f64, loss: f64, m: &crate::world::M
             dir,
         },
         path: leg.path + t,
-        // What the diffuse share scatters is not mirrored.
-        loss_db: loss - to_db(m.radar_reflectivity * (1.0 - m.radar_diffuse)),
+        loss_db: loss - to_db(mirrored),
+        two_way: two_way * mirrored * mirrored,
         bounces: leg.bounces + 1,
         t_max: leg.t_max - t,
     }
 }
 
+/// The two-way decay constant, 1/m, of power through a medium of `alpha` dB/m one way.
+fn two_way_decay(alpha: f64) -> f64 {
+    2.0 * alpha * LN_10 / 10.0
+}
+
 /// The volume echoes of the stretch `[t0, t1]` of `leg` inside scatterers of total η
-/// (`eta`, 1/m) and attenuation `alpha` (dB/m), entered with one-way loss `loss`: the power
-/// η ∫ 10^(−2(loss + α s)/10) ds, in pieces of at most [`VOLUME_PIECE_M`], each under the range
-/// law at its middle.
+/// (`eta`, 1/m) and attenuation `alpha` (dB/m), entered with the two-way power factor
+/// `two_way`: the power η ∫ two_way · e^(−k s) ds (k the two-way decay), in pieces of at most
+/// [`VOLUME_PIECE_M`], each under the range law at its middle. Returns the two-way factor at
+/// `t1`.
 fn volume_echoes(
     (t0, t1): (f64, f64),
-    (loss, alpha, eta): (f64, f64, f64),
+    (two_way, alpha, eta): (f64, f64, f64),
     leg: &Leg,
     material: MaterialId,
     model: &EchoModel,
     mut emit: impl FnMut(Echo),
-) {
-    let pieces = ((t1 - t0) / VOLUME_PIECE_M).ceil().max(1.0);
-    let step = (t1 - t0) / pieces;
-    // Two-way decay constant of the power, 1/m.
-    let k = 2.0 * alpha * LN_10 / 10.0;
-    // The pieces are equally long, so each one's decay integral is the same.
+) -> f64 {
+    // ⌈x⌉ as −⌊−x⌋, without a call to libm's `ceil`.
+    let pieces = (-crate::world::floor_i64(-(t1 - t0) / VOLUME_PIECE_M)).max(1);
+    let step = (t1 - t0) / pieces as f64;
+    let k = two_way_decay(alpha);
+    // The pieces are equally long, so each one's decay integral and its decay across are the
+    // same: one `exp` (or `exp_m1`) for the whole stretch.
     let x = k * step;
-    let integral = if x > 0.125 {
+    let (integral, across) = if x > 0.125 {
         // 1 − e⁻ˣ loses under 10⁻¹⁵ of its value to cancellation here, and libm's `exp`
         // costs about half its `exp_m1`.
-        (1.0 - (-x).exp()) / k
+        let e = (-x).exp();
+        ((1.0 - e) / k, e)
     } else if k > 0.0 {
-        -(-x).exp_m1() / k
+        let m1 = (-x).exp_m1();
+        (-m1 / k, 1.0 + m1)
     } else {
-        step
+        (step, 1.0)
     };
-    for i in 0..pieces as usize {
+    let mut entry = two_way;
+    for i in 0..pieces {
         let a = t0 + step * i as f64;
-        let entry_loss = loss + alpha * (a - t0);
         let mid = leg.path + a + step / 2.0;
         emit(Echo {
             range: leg.path + a,
             depth: step,
             decay_db_per_m: 2.0 * alpha,
-            power_db: to_db(eta * integral * model.range_law.gain(mid)) - 2.0 * entry_loss,
+            power: eta * integral * model.range_law.gain(mid) * entry,
             material,
             kind: EchoKind::Volume,
             bounces: leg.bounces,
         });
+        entry *= across;
     }
-}
-
-/// The linear power of an echo.
-pub fn power_linear(e: &Echo) -> f64 {
-    from_db(e.power_db)
+    entry
 }
 
 #[cfg(test)]
@@ -588,11 +664,11 @@ mod tests {
             );
             assert_eq!((near.len(), far.len()), (1, 1));
             assert!((near[0].range - 5.0).abs() < 1e-12 && (far[0].range - 10.0).abs() < 1e-12);
-            let diff = near[0].power_db - far[0].power_db;
+            let diff = near[0].power_db() - far[0].power_db();
             assert!((diff - step).abs() < 1e-9, "{law:?}: {diff}");
             // Normal incidence on concrete: ρ = 0.35 at 5 m.
             let expect = 10.0 * 0.35f64.log10() + law.gain_db(5.0);
-            assert!((near[0].power_db - expect).abs() < 1e-9);
+            assert!((near[0].power_db() - expect).abs() < 1e-9);
         }
         assert!((RangeLaw::R2.gain_db(2.0) + 6.0206).abs() < 1e-4);
         assert!((RangeLaw::R4.gain_db(2.0) + 12.0412).abs() < 1e-4);
@@ -612,7 +688,7 @@ mod tests {
         let wall = wall.expect("wall echo behind the slab");
         // 1.5 m at 3 dB/m, two ways, plus the slab's entry: 10 log10(1 / (1 - 0.1)), two ways.
         let expect = 2.0 * 3.0 * 1.5 + 2.0 * 10.0 * (1.0 / 0.9f64).log10();
-        assert!((bare[0].power_db - wall.power_db - expect).abs() < 1e-9);
+        assert!((bare[0].power_db() - wall.power_db() - expect).abs() < 1e-9);
         // The slab: a surface echo at 3.25 m and a volume echo over its depth.
         assert!((hidden[0].range - 3.25).abs() < 1e-12 && hidden[0].kind == EchoKind::Surface);
         let vol = hidden[1];
@@ -622,7 +698,7 @@ mod tests {
         let l0 = 10.0 * (1.0 / 0.9f64).log10();
         let k = 2.0 * 3.0 * LN_10 / 10.0;
         let expect = 0.2 * (1.0 - (-k * 1.5).exp()) / k * 10f64.powf(-2.0 * l0 / 10.0);
-        assert!((power_linear(&vol) - expect).abs() < 1e-12);
+        assert!((vol.power - expect).abs() < 1e-12);
         // A slab deeper than the dynamic range hides the wall: 60 dB of range is used up by
         // 10 m of dense foliage (60 dB two ways).
         let deep =
@@ -634,6 +710,75 @@ mod tests {
         };
         let e = echoes_of(&w, &x_ray(), &m60);
         assert!(e.iter().all(|e| e.range < 13.0), "{e:?}");
+    }
+
+    /// A slab deeper than a volume piece glows in equal pieces, each with the analytic power
+    /// of its depth (the two-way factor carried from piece to piece as the walk carries it),
+    /// and the wall behind it has lost exactly 2αd dB plus the slab's entry.
+    #[test]
+    fn a_deep_slab_glows_piece_by_piece_as_the_integral_says() {
+        let depth = 5.0;
+        let slab = Shape::cuboid(
+            DVec3::new(2.0 + depth / 2.0, 0.0, 1.0),
+            DVec3::new(depth, 40.0, 2.0),
+            0.0,
+        )
+        .unwrap();
+        let m = model(RangeLaw::R2);
+        let w = world(&[(slab, "foliage_light"), (wall_at(10.0), "concrete")]);
+        let e = echoes_of(&w, &x_ray(), &m);
+        let pieces: Vec<&Echo> = e.iter().filter(|e| e.kind == EchoKind::Volume).collect();
+        assert_eq!(pieces.len(), 3, "{e:?}");
+        let light = w
+            .materials()
+            .get(w.materials().id("foliage_light").unwrap());
+        let (alpha, eta) = (
+            light.attenuation_db_per_m(Band::Radar),
+            light.radar_backscatter_per_m,
+        );
+        let entry_db = 10.0 * (1.0 / (1.0 - light.radar_reflectivity)).log10();
+        let step = depth / 3.0;
+        let k = 2.0 * alpha * LN_10 / 10.0;
+        for (i, p) in pieces.iter().enumerate() {
+            let a = step * i as f64;
+            assert!((p.range - (2.0 + a)).abs() < 1e-12 && (p.depth - step).abs() < 1e-12);
+            // η ∫ over the piece of 10^(−2(L0 + α s)/10) ds, under r⁻² at its middle.
+            let loss = entry_db + alpha * a;
+            let expect = eta * (1.0 - (-k * step).exp()) / k * 10f64.powf(-2.0 * loss / 10.0)
+                / (2.0 + a + step / 2.0).powi(2);
+            assert!(
+                ((p.power - expect) / expect).abs() < 1e-12,
+                "piece {i}: {p:?}"
+            );
+        }
+        let wall = e.iter().find(|e| e.range > 9.0).expect("the wall behind");
+        let bare = echoes_of(&world(&[(wall_at(10.0), "concrete")]), &x_ray(), &m);
+        let lost = bare[0].power_db() - wall.power_db();
+        assert!(
+            (lost - 2.0 * (alpha * depth + entry_db)).abs() < 1e-9,
+            "{lost}"
+        );
+    }
+
+    /// Files carry an echo's power in dB under `power_db`.
+    #[test]
+    fn an_echo_serialises_its_power_in_db() {
+        let e = Echo {
+            range: 2.0,
+            depth: 0.0,
+            decay_db_per_m: 0.0,
+            power: 0.01,
+            material: MaterialId(0),
+            kind: EchoKind::Surface,
+            bounces: 0,
+        };
+        let v = serde_json::to_value(e).unwrap();
+        assert!(
+            (v["power_db"].as_f64().unwrap() + 20.0).abs() < 1e-12,
+            "{v}"
+        );
+        assert!(v.get("power").is_none());
+        assert!((e.power_db() + 20.0).abs() < 1e-12);
     }
 
     #[test]
@@ -704,10 +849,10 @@ mod tests {
         let direct = f.iter().find(|e| e.bounces == 0).expect("a direct echo");
         assert!((direct.range - hit).abs() < 1e-9, "{f:?}");
         let expect = to_db(METAL_DIFFUSE * 0.5f64.sqrt() / (hit * hit));
-        assert!((direct.power_db - expect).abs() < 1e-9, "{f:?}");
+        assert!((direct.power_db() - expect).abs() < 1e-9, "{f:?}");
         let rough_ghost = f.iter().find(|e| e.bounces == 1).expect("a ghost echo");
         assert_eq!(rough_ghost.range, ghost.range);
-        let weaker = ghost.power_db - rough_ghost.power_db;
+        let weaker = ghost.power_db() - rough_ghost.power_db();
         // Mirrored on the way out and on the way back.
         assert!(
             (weaker + 2.0 * to_db(1.0 - METAL_DIFFUSE)).abs() < 1e-9,
@@ -721,7 +866,7 @@ mod tests {
         let mut k: Vec<Echo> = echoes
             .iter()
             .copied()
-            .filter(|e| e.power_db >= threshold)
+            .filter(|e| e.power_db() >= threshold)
             .collect();
         k.sort_by(|a, b| a.range.total_cmp(&b.range));
         k.truncate(n);

@@ -17,7 +17,7 @@ use std::io::Write;
 use rand::Rng;
 use rand_distr::Exp1;
 
-use super::echo::{Echo, EchoKind, power_linear};
+use super::echo::{Echo, EchoKind};
 use super::signal::ImageConfig;
 use super::{SensorConfig, Tracer, beam_ray};
 use crate::pose::Pose;
@@ -286,7 +286,7 @@ pub fn power_image<R: Rng + ?Sized>(
                 }
             };
             match e.kind {
-                EchoKind::Surface => splat(e.range, power_linear(e) * fluct(rng)),
+                EchoKind::Surface => splat(e.range, e.power * fluct(rng)),
                 EchoKind::Volume => {
                     // The echo's power spread over its depth by its two-way decay, bin by bin.
                     let pieces = (e.depth / bin).ceil().max(1.0) as usize;
@@ -297,7 +297,7 @@ pub fn power_image<R: Rng + ?Sized>(
                     } else {
                         e.depth
                     };
-                    let p = power_linear(e);
+                    let p = e.power;
                     for i in 0..pieces {
                         let s = i as f64 * step;
                         let part = if k > 0.0 {

@@ -232,7 +232,7 @@ impl SensorConfig {
                         .filter_map(|r| {
                             of(r)
                                 .iter()
-                                .map(|e| e.power_db)
+                                .map(|e| e.power)
                                 .max_by(f64::total_cmp)
                                 .map(|p| (r, p))
                         })
@@ -273,7 +273,7 @@ impl SensorConfig {
         world: &World,
     ) -> (f64, HitKind, Option<crate::world::MaterialId>) {
         let pick = match self.signal.return_mode {
-            ReturnMode::Strongest => mine.iter().max_by(|a, b| a.power_db.total_cmp(&b.power_db)),
+            ReturnMode::Strongest => mine.iter().max_by(|a, b| a.power.total_cmp(&b.power)),
             ReturnMode::Last => mine.last(),
             _ => mine.first(),
         };
@@ -520,14 +520,14 @@ mod tests {
             let ray = beam_ray(&s.pose, az, el.sin_cos(), offset);
             let mut alone = Vec::new();
             tracer.echoes(&world, &ray, 1.0 / 3.0, c.range_max, &model, &mut alone);
-            alone.retain(|e| e.power_db >= c.signal.detection_threshold_db);
+            alone.retain(|e| e.power_db() >= c.signal.detection_threshold_db);
             alone.sort_by(|a, b| a.range.total_cmp(&b.range));
             alone.truncate(c.signal.max_echoes);
             // The scan turns a table of its bearings by the yaw, so its ray's direction
             // differs from `beam_ray`'s by a few ulps: the same echoes, to rounding.
             let same = |a: &Echo, b: &Echo| {
                 (a.range - b.range).abs() < 1e-9
-                    && (a.power_db - b.power_db).abs() < 1e-9
+                    && (a.power_db() - b.power_db()).abs() < 1e-9
                     && (a.material, a.kind, a.bounces) == (b.material, b.kind, b.bounces)
             };
             let got = s.echoes_of(i);
@@ -589,7 +589,7 @@ mod tests {
                 "azimuth {:.2} deg",
                 az.to_degrees()
             );
-            if let Some(p) = pole.iter().map(|e| e.power_db).reduce(f64::max) {
+            if let Some(p) = pole.iter().map(|e| e.power_db()).reduce(f64::max) {
                 seen += 1;
                 power.push((az, p));
             }

@@ -330,8 +330,9 @@ pub struct World {
     laser_aerosols: bool,
     /// Bit `band_bit(b)` set when every object is solid or transparent to band `b`.
     binary: u8,
-    /// Per material, the one-way dB a radar ray loses crossing its surface, 10·log10(1/(1−ρ)).
-    transmission_db: Vec<f64>,
+    /// Per material, the one-way dB a radar ray loses crossing its surface, 10·log10(1/(1−ρ)),
+    /// and the same as a two-way power factor, (1−ρ)².
+    transmission: Vec<(f64, f64)>,
 }
 
 impl std::fmt::Debug for World {
@@ -399,21 +400,21 @@ impl World {
             })
             .map(band_bit)
             .sum();
-        let transmission_db = materials
+        let transmission = materials
             .iter()
             .map(|(_, m)| {
                 let rho = m.radar_reflectivity;
                 if rho > 0.0 && rho < 1.0 {
-                    -10.0 * (1.0 - rho).log10()
+                    (-10.0 * (1.0 - rho).log10(), (1.0 - rho) * (1.0 - rho))
                 } else {
-                    0.0
+                    (0.0, 1.0)
                 }
             })
             .collect();
         Self {
             laser_aerosols,
             binary,
-            transmission_db,
+            transmission,
             materials,
             objects,
             aabbs,
@@ -428,9 +429,10 @@ impl World {
     }
 
     /// The one-way loss, dB, of a radar ray entering material `id` through its surface:
-    /// 10·log10(1/(1−ρ)) for a reflectivity ρ in (0, 1), else 0 (DESIGN §7.2).
-    pub fn radar_transmission_db(&self, id: MaterialId) -> f64 {
-        self.transmission_db[usize::from(id.0)]
+    /// 10·log10(1/(1−ρ)) for a reflectivity ρ in (0, 1), else 0 (DESIGN §7.2); and the same
+    /// loss as a two-way power factor, (1−ρ)² (else 1).
+    pub fn radar_transmission(&self, id: MaterialId) -> (f64, f64) {
+        self.transmission[usize::from(id.0)]
     }
 
     /// Whether some object is an aerosol a laser may return from (DESIGN §7.6).
