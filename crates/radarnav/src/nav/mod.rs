@@ -75,7 +75,8 @@ pub trait Behaviour {
 /// if it hit something turning on the spot) before the behaviour resumes, told that it
 /// bumped: the sensor missed something (foliage the radar crosses whole), so the way it was
 /// going is blocked. A recoil that is refused too (the body wedged between two obstacles)
-/// is cut short and the behaviour decides at once.
+/// is cut short and the behaviour decides at once. A turn on the spot that bumped is not
+/// made again in the same sense until the robot has moved off that spot.
 ///
 /// Before that reflex comes the [`guard`]: each command of the behaviour is swept against
 /// its bumpers' returns, and one that would touch them is cut to a free part, or stopped
@@ -89,7 +90,13 @@ pub struct WithRecoil<B> {
     recoiled: bool,
     /// Whether the last command was a recoil.
     recoiling: bool,
+    /// A turn on the spot that bumped: its sense (±1) and the odometry pose it bumped at.
+    pressed: Option<(f64, Pose)>,
 }
+
+/// A turn on the spot that bumped is not made again in the same sense until the robot has
+/// moved this far, m ([`WithRecoil`]).
+const PRESSED_MOVE: f64 = 0.02;
 
 /// How long a recoil lasts, s, its speed, m/s, and its turn rate after a turn, rad/s.
 const RECOIL: (f64, f64, f64) = (0.6, 0.2, 0.5);
@@ -104,6 +111,7 @@ impl<B> WithRecoil<B> {
             last: (0.0, 0.0),
             recoiled: false,
             recoiling: false,
+            pressed: None,
         }
     }
 
@@ -127,6 +135,9 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
         } else if input.bumped && self.remaining == 0 {
             self.remaining = (RECOIL.0 * self.behaviour.rate_hz()).ceil() as u32;
             let (v, omega) = self.last;
+            if v == 0.0 && omega != 0.0 {
+                self.pressed = Some((omega.signum(), *input.odometry));
+            }
             self.behaviour.touched(input, self.last);
             // A turn on the spot that hit something is undone by turning back; a move by
             // moving the other way.
@@ -156,6 +167,21 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
                     self.recoiled = true;
                     d = Decision::Drive(DriveCommand::STOP);
                 }
+            }
+        }
+        // A turn on the spot that bumped presses the same corner in again where it bumped,
+        // whatever the returns say at the moment (range noise may show the corner clear):
+        // that sense of turn stops until the robot has moved off the spot. (Not until it has
+        // turned back: wheels spinning against a blocked turn turn the odometry all the same.)
+        if let Some((sense, at)) = self.pressed {
+            if (input.odometry.xy() - at.xy()).length() > PRESSED_MOVE {
+                self.pressed = None;
+            } else if let Decision::Drive(DriveCommand::Twist(t)) = d
+                && t.v == 0.0
+                && t.omega * sense > 0.0
+            {
+                self.recoiled = true;
+                d = Decision::Drive(DriveCommand::STOP);
             }
         }
         if let Decision::Drive(DriveCommand::Twist(t)) = d {
@@ -241,5 +267,61 @@ mod tests {
         assert_eq!(c.behaviour().told, 1);
         // Its move bumping again starts a new recoil.
         assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
+    }
+
+    /// Turns right on the spot whatever happens, counting the calls told of a bump.
+    struct TurnRight {
+        told: usize,
+    }
+
+    impl Behaviour for TurnRight {
+        fn rate_hz(&self) -> f64 {
+            10.0
+        }
+
+        fn decide(&mut self, _: &ControlInput<'_>, bumped: bool) -> Decision {
+            self.told += usize::from(bumped);
+            Decision::Drive(DriveCommand::twist(0.0, -0.8))
+        }
+    }
+
+    /// A turn on the spot that bumped is not made again there (the returns may show the
+    /// corner clear, as range noise did to a laser robot wedged in a slot, 40 bumps in one
+    /// run): it stops, the behaviour told it bumped, until the robot has moved off the spot.
+    #[test]
+    fn a_turn_that_bumped_is_not_repeated_on_the_same_spot() {
+        let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
+        let run = |c: &mut WithRecoil<TurnRight>, pose: Pose, bumped: bool| {
+            twist(c.update(&ControlInput {
+                time: 0.0,
+                odometry: &pose,
+                truth: &pose,
+                bumped,
+                scans: &[],
+                scan_odometry: &[],
+                slam: None,
+                scan_slam: &[],
+                sensors: &[],
+                vehicle,
+            }))
+        };
+        let here = Pose::default();
+        let mut c = WithRecoil::new(TurnRight { told: 0 });
+        assert_eq!(run(&mut c, here, false).omega, -0.8);
+        // It bumped: turn back for the recoil (the wheels may spin against it: the pose
+        // given here does not change) ...
+        assert_eq!(run(&mut c, here, true).omega, RECOIL.2);
+        while c.remaining > 0 {
+            assert_eq!(run(&mut c, here, false).omega, RECOIL.2);
+        }
+        // ... then the right turn stops, however often it is asked, the behaviour told.
+        for _ in 0..5 {
+            let t = run(&mut c, here, false);
+            assert_eq!((t.v, t.omega), (0.0, 0.0));
+        }
+        assert_eq!(c.behaviour().told, 5);
+        // Moved off the spot (3 cm), the turn goes out again.
+        let moved = Pose::new(0.03, 0.0, 0.0, 0.0);
+        assert_eq!(run(&mut c, moved, false).omega, -0.8);
     }
 }
