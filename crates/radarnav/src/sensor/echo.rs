@@ -143,27 +143,25 @@ fn have_wanted(found: &[Echo], upto: f64, (n, threshold): (usize, f64)) -> bool 
             >= n
 }
 
+/// The bits of an [`EchoModel`]'s thresholds: `min_power_db`, `dynamic_range_db`, `wanted`.
+type FloorsKey = (u64, u64, Option<(usize, u64)>);
+
 /// An [`EchoModel`]'s power thresholds as linear powers: the floor below which echoes are
 /// dropped, and `wanted`'s. Made once per model, not per ray (each is an `exp`).
 #[derive(Clone, Copy, Debug)]
 struct Floors {
-    /// The bits of the model's `min_power_db`, `dynamic_range_db` and `wanted`.
-    key: [u64; 4],
+    key: FloorsKey,
     floor: f64,
     wanted: Option<(usize, f64)>,
 }
 
 impl Floors {
-    fn key(model: &EchoModel) -> [u64; 4] {
-        let (n, t) = model
-            .wanted
-            .map_or((u64::MAX, 0), |(n, t)| (n as u64, t.to_bits()));
-        [
+    fn key(model: &EchoModel) -> FloorsKey {
+        (
             model.min_power_db.to_bits(),
             model.dynamic_range_db.to_bits(),
-            n,
-            t,
-        ]
+            model.wanted.map(|(n, t)| (n, t.to_bits())),
+        )
     }
 
     fn of(model: &EchoModel) -> Self {
@@ -275,9 +273,10 @@ impl EchoTracer {
         out: &mut Vec<Echo>,
     ) -> f64 {
         self.legs.clear();
-        if self.floors.is_none_or(|f| f.key != Floors::key(model)) {
-            self.floors = Some(Floors::of(model));
-        }
+        let floors = match self.floors {
+            Some(f) if f.key == Floors::key(model) => f,
+            _ => *self.floors.insert(Floors::of(model)),
+        };
         let start = out.len();
         let direct = Leg {
             ray: *ray,
@@ -289,28 +288,26 @@ impl EchoTracer {
             t_max,
         };
         // The direct leg first, then its mirrored legs, last found first.
-        let first_cos = self.walk_leg(world, fan, &direct, model, start, out);
+        let first_cos = self.walk_leg(world, fan, &direct, (model, &floors), start, out);
         while let Some(leg) = self.legs.pop() {
-            self.walk_leg(world, None, &leg, model, start, out);
+            self.walk_leg(world, None, &leg, (model, &floors), start, out);
         }
         first_cos.unwrap_or(1.0)
     }
 
-    /// Walks one leg (the ray's echoes begin at `out[start]`); returns the incidence cosine
-    /// at its first surface.
+    /// Walks one leg under `model`, whose thresholds `floors` holds (the ray's echoes begin at
+    /// `out[start]`); returns the incidence cosine at its first surface.
     fn walk_leg(
         &mut self,
         world: &World,
         fan: Option<(&Fan, f64)>,
         leg: &Leg,
-        model: &EchoModel,
+        (model, floors): (&EchoModel, &Floors),
         start: usize,
         out: &mut Vec<Echo>,
     ) -> Option<f64> {
         let ray = &leg.ray;
-        let Some(Floors { floor, wanted, .. }) = self.floors else {
-            unreachable!("echoes_from makes the floors first");
-        };
+        let &Floors { floor, wanted, .. } = floors;
         // The ground plane z = 0 is a solid under every world.
         let t_ground = if ray.dir.z < 0.0 {
             (-ray.origin.z / ray.dir.z).max(0.0)
