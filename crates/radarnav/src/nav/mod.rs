@@ -217,19 +217,30 @@ mod tests {
     use super::*;
     use crate::vehicle::Twist;
 
-    /// Drives straight on, counting the calls that were told of a bump.
-    struct Ahead {
+    /// Commands the same twist `(v, omega)` whatever happens, counting the calls that were
+    /// told of a bump.
+    struct Steady {
+        twist: (f64, f64),
         told: usize,
     }
 
-    impl Behaviour for Ahead {
+    impl Steady {
+        fn new(v: f64, omega: f64) -> Self {
+            Self {
+                twist: (v, omega),
+                told: 0,
+            }
+        }
+    }
+
+    impl Behaviour for Steady {
         fn rate_hz(&self) -> f64 {
             10.0
         }
 
         fn decide(&mut self, _: &ControlInput<'_>, bumped: bool) -> Decision {
             self.told += usize::from(bumped);
-            Decision::Drive(DriveCommand::twist(0.4, 0.0))
+            Decision::Drive(DriveCommand::twist(self.twist.0, self.twist.1))
         }
     }
 
@@ -256,7 +267,7 @@ mod tests {
             sensors: &[],
             vehicle,
         };
-        let mut c = WithRecoil::new(Ahead { told: 0 });
+        let mut c = WithRecoil::new(Steady::new(0.4, 0.0));
         assert_eq!(twist(c.update(&input(false))).v, 0.4);
         // Driving on bumped: back away for RECOIL.0 s.
         assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
@@ -269,29 +280,13 @@ mod tests {
         assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
     }
 
-    /// Turns right on the spot whatever happens, counting the calls told of a bump.
-    struct TurnRight {
-        told: usize,
-    }
-
-    impl Behaviour for TurnRight {
-        fn rate_hz(&self) -> f64 {
-            10.0
-        }
-
-        fn decide(&mut self, _: &ControlInput<'_>, bumped: bool) -> Decision {
-            self.told += usize::from(bumped);
-            Decision::Drive(DriveCommand::twist(0.0, -0.8))
-        }
-    }
-
     /// A turn on the spot that bumped is not made again there (the returns may show the
     /// corner clear, as range noise did to a laser robot wedged in a slot, 40 bumps in one
     /// run): it stops, the behaviour told it bumped, until the robot has moved off the spot.
     #[test]
     fn a_turn_that_bumped_is_not_repeated_on_the_same_spot() {
         let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
-        let run = |c: &mut WithRecoil<TurnRight>, pose: Pose, bumped: bool| {
+        let run = |c: &mut WithRecoil<Steady>, pose: Pose, bumped: bool| {
             twist(c.update(&ControlInput {
                 time: 0.0,
                 odometry: &pose,
@@ -306,7 +301,7 @@ mod tests {
             }))
         };
         let here = Pose::default();
-        let mut c = WithRecoil::new(TurnRight { told: 0 });
+        let mut c = WithRecoil::new(Steady::new(0.0, -0.8));
         assert_eq!(run(&mut c, here, false).omega, -0.8);
         // It bumped: turn back for the recoil (the wheels may spin against it: the pose
         // given here does not change) ...
