@@ -337,9 +337,11 @@ impl Bumpers {
 /// Returns within this distance of the robot's centre are remembered, m: as far as a body
 /// backing off or turning on the spot can reach before the sensor sees there again.
 const MEMORY_RADIUS: f64 = 1.5;
-/// Remembered returns are forgotten after this long, s (odometry drifts, a gyro's bias
-/// even standing still)...
-const MEMORY_TIME: f64 = 120.0;
+/// Remembered returns are forgotten after this long, s (a gyro's bias turns the believed
+/// frame even standing still, some 10°/h for a MEMS gyro: under 2° in this time)... A robot
+/// wedged between two crates stands and shuffles for minutes with a crate's corner behind
+/// it: forgotten after two minutes, the corner was turned into.
+const MEMORY_TIME: f64 = 600.0;
 /// ... or once the robot has moved this far since, m (turns count [`TURN_AS_PATH`]): drift
 /// grows with motion, and a robot shuffling in a narrow way for a minute still needs what
 /// it saw on its way in.
@@ -696,6 +698,42 @@ pub(crate) mod tests {
         let ahead = Twist { v: 0.1, omega: 0.0 };
         assert_eq!(guard(c, v, back), Guarded::Stop);
         assert_eq!(guard(c, v, ahead), Guarded::Free);
+    }
+
+    #[test]
+    fn a_robot_standing_wedged_for_minutes_keeps_what_is_behind_it() {
+        use super::super::guard::{Guarded, guard};
+        use crate::vehicle::{P3AT, Twist};
+        use std::f64::consts::PI;
+        // A wall 0.3 m ahead, then turned about on the spot: the wall is 0.3 m behind, in
+        // the blind sector. Five minutes later, standing there, backing into it is still
+        // stopped: the robot has not moved, so nothing it remembers has drifted.
+        let mount = Pose::default();
+        let sense = |scan: &Scan| Bumpers::sense(scan, &mount, 8, 1.27, 0.5, BumperRule::All);
+        let seen = laser_scan(1080, |a| {
+            if a.cos() > 0.2 {
+                (0.3 / a.cos()) as f32
+            } else {
+                f32::INFINITY
+            }
+        });
+        let empty = laser_scan(1080, |_| f32::INFINITY);
+        let about = Pose::new(0.0, 0.0, 0.0, PI);
+        let back = Twist {
+            v: -0.3,
+            omega: 0.0,
+        };
+        let mut sensor = BumperSensor::new(BumperConfig::default());
+        sensor.remember(&mut sense(&seen), &seen, &mount, &Pose::default(), 0.0);
+        for now in [1.0, 300.0] {
+            let mut b = sense(&empty);
+            sensor.remember(&mut b, &empty, &mount, &about, now);
+            assert_eq!(
+                guard(b.clearance(), &P3AT, back),
+                Guarded::Stop,
+                "at {now} s"
+            );
+        }
     }
 
     #[test]
