@@ -90,12 +90,13 @@ pub struct WithRecoil<B> {
     recoiled: bool,
     /// Whether the last command was a recoil.
     recoiling: bool,
-    /// A turn on the spot that bumped: its sense (±1) and the odometry pose it bumped at.
+    /// A turn on the spot that bumped or that the guard stopped: its sense (±1) and the
+    /// odometry pose it was stopped at.
     pressed: Option<(f64, Pose)>,
 }
 
-/// A turn on the spot that bumped is not made again in the same sense until the robot has
-/// moved this far, m ([`WithRecoil`]).
+/// A turn on the spot that bumped, or that the guard stopped, is not made again in the same
+/// sense until the robot has moved this far, m ([`WithRecoil`]).
 const PRESSED_MOVE: f64 = 0.02;
 
 /// How long a recoil lasts, s, its speed, m/s, and its turn rate after a turn, rad/s.
@@ -166,12 +167,23 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
                     // What a bumper would have said a moment later.
                     self.recoiled = true;
                     d = Decision::Drive(DriveCommand::STOP);
+                    // Held as a bump is: on this spot the next scan's noise must not let
+                    // through what this one stopped (a corner behind the body may be one
+                    // remembered return, which the guard does not count alone).
+                    if let DriveCommand::Twist(t) = cmd
+                        && t.v == 0.0
+                        && t.omega != 0.0
+                        && self.pressed.is_none()
+                    {
+                        self.pressed = Some((t.omega.signum(), *input.odometry));
+                    }
                 }
             }
         }
-        // A turn on the spot that bumped presses the same corner in again where it bumped,
-        // whatever the returns say at the moment (range noise may show the corner clear):
-        // that sense of turn stops until the robot has moved off the spot. (Not until it has
+        // A turn on the spot that bumped (or that the guard stopped) presses the same corner
+        // in again on that spot, whatever the returns say at the moment (range noise may
+        // show the corner clear): that sense of turn stops until the robot has moved off the
+        // spot. (Not until it has
         // turned back: wheels spinning against a blocked turn turn the odometry all the same.)
         if let Some((sense, at)) = self.pressed {
             if (input.odometry.xy() - at.xy()).length() > PRESSED_MOVE {
@@ -218,10 +230,11 @@ mod tests {
     use crate::vehicle::Twist;
 
     /// Commands the same twist `(v, omega)` whatever happens, counting the calls that were
-    /// told of a bump.
+    /// told of a bump; its bumpers are whatever the test gives it.
     struct Steady {
         twist: (f64, f64),
         told: usize,
+        bumpers: Option<Bumpers>,
     }
 
     impl Steady {
@@ -229,6 +242,7 @@ mod tests {
             Self {
                 twist: (v, omega),
                 told: 0,
+                bumpers: None,
             }
         }
     }
@@ -241,6 +255,10 @@ mod tests {
         fn decide(&mut self, _: &ControlInput<'_>, bumped: bool) -> Decision {
             self.told += usize::from(bumped);
             Decision::Drive(DriveCommand::twist(self.twist.0, self.twist.1))
+        }
+
+        fn bumpers(&self) -> Option<&Bumpers> {
+            self.bumpers.as_ref()
         }
     }
 
@@ -318,5 +336,62 @@ mod tests {
         // Moved off the spot (3 cm), the turn goes out again.
         let moved = Pose::new(0.03, 0.0, 0.0, 0.0);
         assert_eq!(run(&mut c, moved, false).omega, -0.8);
+    }
+
+    /// A turn on the spot the guard stopped stays stopped on that spot when the next scan
+    /// shows the way clear: a wall 2 cm beside the body, then a scan without it (range
+    /// noise, or a corner behind remembered as one return, as on a random crates map
+    /// where the let-through turn bumped).
+    #[test]
+    fn a_turn_the_guard_stopped_is_not_let_through_by_the_next_scan() {
+        use super::bumper::BumperRule;
+        use super::bumper::tests::ring_scan;
+        let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
+        let run = |c: &mut WithRecoil<Steady>, pose: Pose| {
+            twist(c.update(&ControlInput {
+                time: 0.0,
+                odometry: &pose,
+                truth: &pose,
+                bumped: false,
+                scans: &[],
+                scan_odometry: &[],
+                slam: None,
+                scan_slam: &[],
+                sensors: &[],
+                vehicle,
+            }))
+        };
+        let sense = |f: &dyn Fn(f64) -> f32| {
+            let scan = ring_scan(720, f);
+            Bumpers::sense(&scan, &Pose::default(), 8, 1.27, 0.5, BumperRule::All)
+        };
+        // A wall along the right side, 2 cm from the body: the right turn's front corner
+        // swings into it.
+        let side = 0.5 * vehicle.width + 0.02;
+        let wall = sense(&|a: f64| {
+            if a.sin() < -0.1 {
+                (side / -a.sin()) as f32
+            } else {
+                f32::INFINITY
+            }
+        });
+        let clear = sense(&|_| f32::INFINITY);
+        let here = Pose::default();
+        let mut c = WithRecoil::new(Steady::new(0.0, -0.8));
+        c.behaviour.bumpers = Some(wall);
+        assert_eq!(run(&mut c, here).omega, 0.0);
+        assert_eq!(c.behaviour().told, 0);
+        // The next scan shows nothing there: on the same spot the turn stays stopped.
+        c.behaviour.bumpers = Some(clear);
+        for _ in 0..3 {
+            assert_eq!(run(&mut c, here).omega, 0.0);
+        }
+        // A turn the other way is not held back by it.
+        c.behaviour.twist = (0.0, 0.8);
+        assert_eq!(run(&mut c, here).omega, 0.8);
+        // Moved off the spot (3 cm), the right turn goes out again.
+        c.behaviour.twist = (0.0, -0.8);
+        let moved = Pose::new(0.03, 0.0, 0.0, 0.0);
+        assert_eq!(run(&mut c, moved).omega, -0.8);
     }
 }
