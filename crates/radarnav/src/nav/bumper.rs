@@ -597,6 +597,18 @@ pub(crate) mod tests {
     }
 
     /// A 270° scan (the back quarter blind) of `n` rays whose range is `f(azimuth)`.
+    /// Ranges of a straight wall `d` m ahead of the sensor, across its path (none beyond
+    /// about 78° off the wall's normal).
+    fn wall_at(d: f64) -> impl Fn(f64) -> f32 + Copy {
+        move |a| {
+            if a.cos() > 0.2 {
+                (d / a.cos()) as f32
+            } else {
+                f32::INFINITY
+            }
+        }
+    }
+
     fn laser_scan(n: usize, f: impl Fn(f64) -> f32) -> Scan {
         let span = 1.5 * std::f64::consts::PI;
         let inc = span / n as f64;
@@ -614,13 +626,7 @@ pub(crate) mod tests {
         // A radar 1 m from a wall ahead scans; then the robot drives 0.3 m on and turns 90°
         // left before the next scan. The sectors stay the scan's; the returns the body is
         // checked against are where the wall is now: 0.7 m away, to the right.
-        let wall_ahead = |a: f64| {
-            if a.cos() > 0.2 {
-                (1.0 / a.cos()) as f32
-            } else {
-                f32::INFINITY
-            }
-        };
+        let wall_ahead = wall_at(1.0);
         let mut scan = ring_scan(360, wall_ahead);
         let sensors = [MountedSensor {
             name: "radar".into(),
@@ -710,13 +716,7 @@ pub(crate) mod tests {
         // stopped: the robot has not moved, so nothing it remembers has drifted.
         let mount = Pose::default();
         let sense = |scan: &Scan| Bumpers::sense(scan, &mount, 8, 1.27, 0.5, BumperRule::All);
-        let seen = laser_scan(1080, |a| {
-            if a.cos() > 0.2 {
-                (0.3 / a.cos()) as f32
-            } else {
-                f32::INFINITY
-            }
-        });
+        let seen = laser_scan(1080, wall_at(0.3));
         let empty = laser_scan(1080, |_| f32::INFINITY);
         let about = Pose::new(0.0, 0.0, 0.0, PI);
         let back = Twist {
@@ -741,13 +741,7 @@ pub(crate) mod tests {
         use std::f64::consts::PI;
         let mount = Pose::default();
         let sense = |scan: &Scan| Bumpers::sense(scan, &mount, 8, 1.27, 0.5, BumperRule::All);
-        let seen = laser_scan(1080, |a| {
-            if a.cos() > 0.2 {
-                (1.0 / a.cos()) as f32
-            } else {
-                f32::INFINITY
-            }
-        });
+        let seen = laser_scan(1080, wall_at(1.0));
         let empty = laser_scan(1080, |_| f32::INFINITY);
         let behind = Pose::new(0.0, 0.0, 0.0, PI);
         for (moved, kept) in [(MEMORY_PATH - 0.5, true), (MEMORY_PATH + 0.5, false)] {
@@ -766,13 +760,7 @@ pub(crate) mod tests {
         use std::f64::consts::PI;
         let mount = Pose::default();
         let sense = |scan: &Scan| Bumpers::sense(scan, &mount, 8, 1.27, 0.5, BumperRule::All);
-        let wall_ahead = |a: f64| {
-            if a.cos() > 0.2 {
-                (1.0 / a.cos()) as f32
-            } else {
-                f32::INFINITY
-            }
-        };
+        let wall_ahead = wall_at(1.0);
         let mut sensor = BumperSensor::new(BumperConfig::default());
         let mut remember = |scan: &Scan, pose: Pose, now: f64| {
             let mut b = sense(scan);
@@ -821,13 +809,7 @@ pub(crate) mod tests {
         // A standoff retry where a wall the laser saw is now behind it, blind: backing off
         // must still see it, and the sectors take the new distance at the next update.
         let mut sensor = BumperSensor::new(BumperConfig::default());
-        let wall_ahead = |a: f64| {
-            if a.cos() > 0.2 {
-                (1.0 / a.cos()) as f32
-            } else {
-                f32::INFINITY
-            }
-        };
+        let wall_ahead = wall_at(1.0);
         let seen = laser_scan(1080, wall_ahead);
         let mut b = Bumpers::sense(&seen, &Pose::default(), 8, 1.27, 0.5, BumperRule::All);
         sensor.remember(&mut b, &seen, &Pose::default(), &Pose::default(), 0.0);

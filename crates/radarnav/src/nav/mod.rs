@@ -269,11 +269,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_recoil_that_is_refused_too_hands_back_to_the_behaviour() {
-        let pose = Pose::default();
+    /// One control step of a P3-AT standing at `pose` (odometry and truth alike), without
+    /// scans: the twist `c` commands.
+    fn step(c: &mut WithRecoil<Steady>, pose: Pose, bumped: bool) -> Twist {
         let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
-        let input = |bumped| ControlInput {
+        twist(c.update(&ControlInput {
             time: 0.0,
             odometry: &pose,
             truth: &pose,
@@ -284,18 +284,23 @@ mod tests {
             scan_slam: &[],
             sensors: &[],
             vehicle,
-        };
+        }))
+    }
+
+    #[test]
+    fn a_recoil_that_is_refused_too_hands_back_to_the_behaviour() {
+        let here = Pose::default();
         let mut c = WithRecoil::new(Steady::new(0.4, 0.0));
-        assert_eq!(twist(c.update(&input(false))).v, 0.4);
+        assert_eq!(step(&mut c, here, false).v, 0.4);
         // Driving on bumped: back away for RECOIL.0 s.
-        assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
-        assert_eq!(twist(c.update(&input(false))).v, -RECOIL.1);
+        assert_eq!(step(&mut c, here, true).v, -RECOIL.1);
+        assert_eq!(step(&mut c, here, false).v, -RECOIL.1);
         // Backing away bumped as well (wedged): the behaviour decides, told of the bump,
         // instead of backing into the same obstacle for ever.
-        assert_eq!(twist(c.update(&input(true))).v, 0.4);
+        assert_eq!(step(&mut c, here, true).v, 0.4);
         assert_eq!(c.behaviour().told, 1);
         // Its move bumping again starts a new recoil.
-        assert_eq!(twist(c.update(&input(true))).v, -RECOIL.1);
+        assert_eq!(step(&mut c, here, true).v, -RECOIL.1);
     }
 
     /// A turn on the spot that bumped is not made again there (the returns may show the
@@ -303,39 +308,24 @@ mod tests {
     /// run): it stops, the behaviour told it bumped, until the robot has moved off the spot.
     #[test]
     fn a_turn_that_bumped_is_not_repeated_on_the_same_spot() {
-        let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
-        let run = |c: &mut WithRecoil<Steady>, pose: Pose, bumped: bool| {
-            twist(c.update(&ControlInput {
-                time: 0.0,
-                odometry: &pose,
-                truth: &pose,
-                bumped,
-                scans: &[],
-                scan_odometry: &[],
-                slam: None,
-                scan_slam: &[],
-                sensors: &[],
-                vehicle,
-            }))
-        };
         let here = Pose::default();
         let mut c = WithRecoil::new(Steady::new(0.0, -0.8));
-        assert_eq!(run(&mut c, here, false).omega, -0.8);
+        assert_eq!(step(&mut c, here, false).omega, -0.8);
         // It bumped: turn back for the recoil (the wheels may spin against it: the pose
         // given here does not change) ...
-        assert_eq!(run(&mut c, here, true).omega, RECOIL.2);
+        assert_eq!(step(&mut c, here, true).omega, RECOIL.2);
         while c.remaining > 0 {
-            assert_eq!(run(&mut c, here, false).omega, RECOIL.2);
+            assert_eq!(step(&mut c, here, false).omega, RECOIL.2);
         }
         // ... then the right turn stops, however often it is asked, the behaviour told.
         for _ in 0..5 {
-            let t = run(&mut c, here, false);
+            let t = step(&mut c, here, false);
             assert_eq!((t.v, t.omega), (0.0, 0.0));
         }
         assert_eq!(c.behaviour().told, 5);
         // Moved off the spot (3 cm), the turn goes out again.
         let moved = Pose::new(0.03, 0.0, 0.0, 0.0);
-        assert_eq!(run(&mut c, moved, false).omega, -0.8);
+        assert_eq!(step(&mut c, moved, false).omega, -0.8);
     }
 
     /// A turn on the spot the guard stopped stays stopped on that spot when the next scan
@@ -347,20 +337,7 @@ mod tests {
         use super::bumper::BumperRule;
         use super::bumper::tests::ring_scan;
         let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
-        let run = |c: &mut WithRecoil<Steady>, pose: Pose| {
-            twist(c.update(&ControlInput {
-                time: 0.0,
-                odometry: &pose,
-                truth: &pose,
-                bumped: false,
-                scans: &[],
-                scan_odometry: &[],
-                slam: None,
-                scan_slam: &[],
-                sensors: &[],
-                vehicle,
-            }))
-        };
+        let run = |c: &mut WithRecoil<Steady>, pose: Pose| step(c, pose, false);
         let sense = |f: &dyn Fn(f64) -> f32| {
             let scan = ring_scan(720, f);
             Bumpers::sense(&scan, &Pose::default(), 8, 1.27, 0.5, BumperRule::All)
