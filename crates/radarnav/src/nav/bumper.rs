@@ -596,7 +596,6 @@ pub(crate) mod tests {
         }
     }
 
-    /// A 270° scan (the back quarter blind) of `n` rays whose range is `f(azimuth)`.
     /// Ranges of a straight wall `d` m ahead of the sensor, across its path (none beyond
     /// about 78° off the wall's normal).
     fn wall_at(d: f64) -> impl Fn(f64) -> f32 + Copy {
@@ -609,6 +608,7 @@ pub(crate) mod tests {
         }
     }
 
+    /// A 270° scan (the back quarter blind) of `n` rays whose range is `f(azimuth)`.
     fn laser_scan(n: usize, f: impl Fn(f64) -> f32) -> Scan {
         let span = 1.5 * std::f64::consts::PI;
         let inc = span / n as f64;
