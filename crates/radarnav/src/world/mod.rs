@@ -23,7 +23,7 @@ use std::cmp::Ordering;
 use glam::{DVec2, DVec3};
 
 use grid::{CellWalk, Grid};
-use mesh::{BoxRay, Need};
+use mesh::{BoxRay, Need, SingleStretch};
 
 /// A solid in the world.
 #[derive(Clone, Debug, PartialEq)]
@@ -111,6 +111,8 @@ pub struct RayQuery {
     stamp: u32,
     /// The current ray prepared for the mesh bounds tests (set only in a world with meshes).
     box_ray: BoxRay,
+    /// Its stretch up to the query's `t_max` for [`BoxRay::may_meet_single`] (likewise).
+    stretch: SingleStretch,
 }
 
 impl RayQuery {
@@ -319,6 +321,10 @@ pub struct World {
     mesh_reach: Vec<Option<mesh::Reach>>,
     /// Whether some object is a mesh: only then does a ray need its direction's reciprocal.
     has_meshes: bool,
+    /// Per part, [`mesh::Reach::single`] of its object if a mesh, else
+    /// [`mesh::SingleReach::UNBOUNDED`]: what a ray query tests a mesh part against before
+    /// anything else of it (only in a world with meshes; [`World::reach_passes`]).
+    part_reach: Vec<mesh::SingleReach>,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
     parts: Vec<Part>,
@@ -385,6 +391,14 @@ impl World {
             }
         }
         let grid = Grid::new(&rects);
+        let part_reach = parts
+            .iter()
+            .map(|p| {
+                mesh_reach[p.object as usize]
+                    .as_ref()
+                    .map_or(mesh::SingleReach::UNBOUNDED, mesh::Reach::single)
+            })
+            .collect();
         let part_rects = rects.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
         let ground = materials.id("ground").expect("built-ins are never removed");
         let laser_aerosols = objects
@@ -420,6 +434,7 @@ impl World {
             aabbs,
             has_meshes: mesh_reach.iter().any(Option::is_some),
             mesh_reach,
+            part_reach,
             solid,
             parts,
             part_rects,
@@ -487,7 +502,7 @@ impl World {
         stop_band: Option<Band>,
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
-        self.start_ray(ray, q);
+        self.start_ray(ray, t_max, q);
         OrderedIntervals {
             world: self,
             ray,
@@ -512,7 +527,7 @@ impl World {
         q: &'q mut RayQuery,
     ) -> OrderedIntervals<'w, 'q> {
         debug_assert_eq!(ray.origin, fan.origin());
-        self.start_ray(ray, q);
+        self.start_ray(ray, t_max, q);
         OrderedIntervals {
             world: self,
             ray,
@@ -525,10 +540,11 @@ impl World {
     }
 
     /// Readies `q` for a new ray.
-    fn start_ray(&self, ray: &Ray, q: &mut RayQuery) {
+    fn start_ray(&self, ray: &Ray, t_max: f64, q: &mut RayQuery) {
         q.next_ray(self.objects.len() + self.parts.len());
         if self.has_meshes {
             q.box_ray = BoxRay::of(ray);
+            q.stretch = q.box_ray.single_stretch(t_max);
         }
     }
 
@@ -558,6 +574,9 @@ impl World {
     // Inlined into both callers: the call's own frame cost about a tenth of a forest ray.
     #[inline(always)]
     fn test_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
+        if !self.reach_passes(part, &q.box_ray, &q.stretch) {
+            return;
+        }
         let pending = &mut q.intervals;
         // The interval goes on field by field, in registers: handed over whole, it went
         // through memory, its fields written one by one and read back sixteen bytes at a time,
@@ -694,10 +713,11 @@ impl World {
         band: Band,
         q: &mut RayQuery,
     ) -> Option<(f64, MaterialId)> {
-        self.start_ray(ray, q);
+        self.start_ray(ray, t_max, q);
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
         let (stamps, stamp, spans, box_ray) = (&mut q.stamps, q.stamp, &mut q.spans, &q.box_ray);
+        let mut stretch = q.stretch;
         // Tests a part (objects not solid to the band are skipped) and keeps in `best`
         // whichever interval comes first in entry order.
         let mut test = |part: u32, best: &mut Option<Interval>| {
@@ -737,14 +757,18 @@ impl World {
                     {
                         break;
                     }
-                    test(part, &mut best);
+                    if self.part_may_meet(part, box_ray, t_max, best, &mut stretch) {
+                        test(part, &mut best);
+                    }
                 }
             }
             None => {
                 let mut walk = CellWalk::new(&self.grid, ray, t_max);
                 while let Some((cell, t_exit)) = walk.next_cell(&self.grid) {
                     for &part in self.grid.cell(cell) {
-                        test(part, &mut best);
+                        if self.part_may_meet(part, box_ray, t_max, best, &mut stretch) {
+                            test(part, &mut best);
+                        }
                     }
                     // Every interval beginning before the cell's exit has been found.
                     if best.is_some_and(|b| b.t_in < t_exit) {
@@ -754,6 +778,37 @@ impl World {
             }
         }
         best.map(|b| (b.t_in, b.material))
+    }
+
+    /// Whether part `part` may hold what [`World::first_solid`] looks for, given the `best`
+    /// interval found so far: [`World::reach_passes`] on the ray's stretch up to `t_max`, or
+    /// to just past the best entry. `stretch` is that stretch, remade here when `best` has
+    /// moved its end.
+    #[inline(always)]
+    fn part_may_meet(
+        &self,
+        part: u32,
+        box_ray: &BoxRay,
+        t_max: f64,
+        best: Option<Interval>,
+        stretch: &mut SingleStretch,
+    ) -> bool {
+        if !self.has_meshes {
+            return true;
+        }
+        let t_max = best.map_or(t_max, |b| t_max.min(b.t_in.next_up()));
+        if t_max != stretch.t_max() {
+            *stretch = box_ray.single_stretch(t_max);
+        }
+        self.reach_passes(part, box_ray, stretch)
+    }
+
+    /// Whether the ray of `box_ray` may have an interval of part `part` within `stretch`:
+    /// false only for a mesh part it passes by ([`BoxRay::may_meet_single`]), tested before
+    /// anything else of the part is fetched.
+    #[inline(always)]
+    fn reach_passes(&self, part: u32, box_ray: &BoxRay, stretch: &SingleStretch) -> bool {
+        !self.has_meshes || box_ray.may_meet_single(&self.part_reach[part as usize], stretch)
     }
 
     /// Hands each interval of object `index` on `ray` that overlaps `(0, t_max)` to `take`:
