@@ -345,14 +345,18 @@ struct SingleRay {
     err: [f32; 3],
     parallel: [bool; 3],
     /// The same in four lanes, for [`SingleRay::stretch_in`].
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     lanes: Lanes,
     /// Each axis' numbers in all four lanes, for [`Node::entries_single`].
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     broadcast: Broadcast,
 }
 
 /// [`SingleRay`]'s numbers of each axis repeated in four lanes: `origin[axis]` is
 /// `[origin[axis]; 4]`, and so on.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+// Read only by the SSE form of the node test (elsewhere the scalar form runs).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 struct Broadcast {
     origin: [[f32; 4]; 3],
     origin_down: [[f32; 4]; 3],
@@ -716,6 +720,8 @@ impl SingleStretch {
 /// The lanes of [`SingleRay`]'s four-lane form: axes x, y, z, and a lane that every box of
 /// [`SingleReach`] leaves unbounded.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+// Read only by the SSE forms of the tests (elsewhere the scalar forms run).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 struct Lanes {
     origin: [f32; 4],
     origin_down: [f32; 4],
