@@ -239,7 +239,7 @@ impl Node {
     /// their error (the origin's rounding to `f32` times the reciprocal, plus a few units in
     /// the last place of the distance), so a box the line meets is never missed and its entry
     /// is never put too far. The four boxes in the four lanes of SSE registers, operation for
-    /// operation as [`Node::entries_single_scalar`] (the same result to the bit): the
+    /// operation as `Node::entries_single_scalar` (the same result to the bit): the
     /// compiler did not vectorise that loop, and it took 160 instructions a node.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
@@ -310,13 +310,14 @@ impl Node {
             let (lo, hi) = (&self.lo[axis], &self.hi[axis]);
             if ray.parallel[axis] {
                 // Exact: against bounds in single precision, `lo <= o` is `lo <= o rounded up`.
-                let (down, up) = (ray.origin_down[axis], ray.origin_up[axis]);
+                let (down, up) = (ray.lanes.origin_down[axis], ray.lanes.origin_up[axis]);
                 for j in 0..WIDTH {
                     inside[j] &= lo[j] <= up && down <= hi[j];
                 }
                 continue;
             }
-            let (o, inv, err) = (ray.origin[axis], ray.inv[axis], ray.err[axis]);
+            let l = &ray.lanes;
+            let (o, inv, err) = (l.origin[axis], l.inv[axis], l.err[axis]);
             for j in 0..WIDTH {
                 let a = (lo[j] - o) * inv;
                 let b = (hi[j] - o) * inv;
@@ -335,17 +336,12 @@ impl Node {
 
 /// A ray in single precision for [`Node::entries_single`]: its origin rounded (and rounded
 /// down and up, for the parallel axes), its reciprocal direction, and per axis a bound on the
-/// error the origin's rounding puts into a distance.
+/// error the origin's rounding puts into a distance. Held once, in the four-lane form the
+/// SSE tests load (the scalar forms read its first three lanes), and each axis' numbers again
+/// repeated across four lanes for the node test.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct SingleRay {
-    origin: [f32; 3],
-    origin_down: [f32; 3],
-    origin_up: [f32; 3],
-    inv: [f32; 3],
-    err: [f32; 3],
     parallel: [bool; 3],
-    /// The same in four lanes, for [`SingleRay::stretch_in`].
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     lanes: Lanes,
     /// Each axis' numbers in all four lanes, for [`Node::entries_single`].
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
@@ -353,7 +349,7 @@ struct SingleRay {
 }
 
 /// [`SingleRay`]'s numbers of each axis repeated in four lanes: `origin[axis]` is
-/// `[origin[axis]; 4]`, and so on.
+/// `[lanes.origin[axis]; 4]`, and so on.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 // Read only by the SSE form of the node test (elsewhere the scalar form runs).
 #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
@@ -384,33 +380,38 @@ impl SingleRay {
         });
         fits.then(|| {
             let o32 = origin.map(|o| o as f32);
-            let mut ray = Self {
-                origin: o32,
-                origin_down: origin.map(f32_down),
-                origin_up: origin.map(f32_up),
-                inv: inv.map(|i| if i.is_finite() { i as f32 } else { 0.0 }),
-                // |o − o32|·|1/d|, and a little more for the rounding of the reciprocal.
-                err: std::array::from_fn(|a| {
-                    if parallel[a] {
-                        0.0
-                    } else {
-                        f32_up((origin[a] - f64::from(o32[a])).abs() * inv[a].abs() * (1.0 + 1e-6))
-                    }
-                }),
-                parallel,
-                lanes: Lanes::default(),
-                broadcast: Broadcast::default(),
-            };
-            ray.lanes = ray.lanes();
+            let down = origin.map(f32_down);
+            let up = origin.map(f32_up);
+            let inv32 = inv.map(|i| if i.is_finite() { i as f32 } else { 0.0 });
+            // |o − o32|·|1/d|, and a little more for the rounding of the reciprocal.
+            let err: [f32; 3] = std::array::from_fn(|a| {
+                if parallel[a] {
+                    0.0
+                } else {
+                    f32_up((origin[a] - f64::from(o32[a])).abs() * inv[a].abs() * (1.0 + 1e-6))
+                }
+            });
+            let lane = |v: [f32; 3], fourth: f32| [v[0], v[1], v[2], fourth];
             let each = |v: [f32; 3]| v.map(|x| [x; 4]);
-            ray.broadcast = Broadcast {
-                origin: each(ray.origin),
-                origin_down: each(ray.origin_down),
-                origin_up: each(ray.origin_up),
-                inv: each(ray.inv),
-                err: each(ray.err),
-            };
-            ray
+            Self {
+                parallel,
+                lanes: Lanes {
+                    origin: lane(o32, 0.0),
+                    origin_down: lane(down, 0.0),
+                    origin_up: lane(up, 0.0),
+                    inv: lane(inv32, 1.0),
+                    err: lane(err, 0.0),
+                    parallel: [0, 1, 2, 3].map(|a| if a < 3 && parallel[a] { u32::MAX } else { 0 }),
+                    any_parallel: parallel.contains(&true),
+                },
+                broadcast: Broadcast {
+                    origin: each(o32),
+                    origin_down: each(down),
+                    origin_up: each(up),
+                    inv: each(inv32),
+                    err: each(err),
+                },
+            }
         })
     }
 }
@@ -720,8 +721,6 @@ impl SingleStretch {
 /// The lanes of [`SingleRay`]'s four-lane form: axes x, y, z, and a lane that every box of
 /// [`SingleReach`] leaves unbounded.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-// Read only by the SSE forms of the tests (elsewhere the scalar forms run).
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 struct Lanes {
     origin: [f32; 4],
     origin_down: [f32; 4],
@@ -729,33 +728,15 @@ struct Lanes {
     /// The reciprocal, 1 in the fourth lane and 0 on parallel axes (which `parallel` masks).
     inv: [f32; 4],
     err: [f32; 4],
-    /// All bits set on the axes the ray runs parallel to.
+    /// All bits set on the axes the ray runs parallel to (the SSE test's mask).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     parallel: [u32; 4],
     /// Whether it runs parallel to some axis.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     any_parallel: bool,
 }
 
 impl SingleRay {
-    /// The four-lane form of the ray.
-    fn lanes(&self) -> Lanes {
-        let lane = |v: [f32; 3], fourth: f32| [v[0], v[1], v[2], fourth];
-        Lanes {
-            origin: lane(self.origin, 0.0),
-            origin_down: lane(self.origin_down, 0.0),
-            origin_up: lane(self.origin_up, 0.0),
-            inv: lane(self.inv, 1.0),
-            err: lane(self.err, 0.0),
-            parallel: [0, 1, 2, 3].map(|a| {
-                if a < 3 && self.parallel[a] {
-                    u32::MAX
-                } else {
-                    0
-                }
-            }),
-            any_parallel: self.parallel.contains(&true),
-        }
-    }
-
     /// The stretch `(t0, t1)` of the ray's line inside the box of `reach`, widened as in
     /// [`Node::entries_single`] (`t0 > t1`: it misses the box). Four lanes at once: the
     /// scalar form took a hundred instructions a box, with a branch per axis.
@@ -820,12 +801,14 @@ impl SingleRay {
         for axis in 0..3 {
             let (lo, hi) = (reach.lo[axis], reach.hi[axis]);
             if self.parallel[axis] {
-                if !(lo <= self.origin_up[axis] && self.origin_down[axis] <= hi) {
+                let l = &self.lanes;
+                if !(lo <= l.origin_up[axis] && l.origin_down[axis] <= hi) {
                     return (f32::INFINITY, f32::NEG_INFINITY);
                 }
                 continue;
             }
-            let (o, inv, err) = (self.origin[axis], self.inv[axis], self.err[axis]);
+            let l = &self.lanes;
+            let (o, inv, err) = (l.origin[axis], l.inv[axis], l.err[axis]);
             let (a, b) = ((lo - o) * inv, (hi - o) * inv);
             let (near, far) = if a < b { (a, b) } else { (b, a) };
             t0 = t0.max(near - (err + near.abs() * Self::RELATIVE));
