@@ -18,6 +18,7 @@
 //! the answer is the one the whole line's crossings give, found without most of them.
 
 use std::collections::HashMap;
+use std::mem::MaybeUninit;
 
 use glam::{DVec2, DVec3};
 use thiserror::Error;
@@ -139,6 +140,11 @@ const SAH_DEPTH: usize = 12;
 fn sah_bin(c: f64, lo: f64, ext: f64) -> usize {
     (((c - lo) / ext * SAH_BINS as f64) as usize).min(SAH_BINS - 1)
 }
+
+/// Boxes a depth-first search of a hierarchy holds at most: at most `SAH_DEPTH` levels of
+/// heuristic cuts, then median splits (log4(triangles / 4) ≤ 11 more levels), each level
+/// leaving at most three children behind. A fixed stack, no allocation per query.
+const STACK: usize = 3 * (SAH_DEPTH + 12) + 1;
 
 /// A box still to search: where the ray's line enters it (less a rounding slack), and its
 /// [`Child::link`] and [`Child::count`].
@@ -1127,10 +1133,7 @@ impl TriMesh {
         keep: impl Fn(&Node) -> [bool; WIDTH],
         mut f: impl FnMut(usize),
     ) {
-        // At most `SAH_DEPTH` levels of heuristic cuts, then median splits (log4(triangles /
-        // 4) ≤ 11 more levels), each level leaving at most three children behind: a fixed
-        // stack, no allocation per query.
-        let mut stack = [(0u32, 0u32); 3 * (SAH_DEPTH + 12) + 1];
+        let mut stack = [(0u32, 0u32); STACK];
         let mut top = 0;
         if keep_root {
             stack[0] = (self.root.link, self.root.count);
@@ -1242,9 +1245,17 @@ impl TriMesh {
         let slack = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element())
             + 1e-9 * ray.origin.abs().max_element();
         let whole = (f64::NEG_INFINITY, f64::INFINITY);
-        let Some((_, t_leave)) = box_ray.stretch_in(lo - slack, hi + slack, whole) else {
+        let Some((t_enter, t_leave)) = box_ray.stretch_in(lo - slack, hi + slack, whole) else {
             return;
         };
+        // A mesh wholly ahead of the ray (the usual case for a sensor outside it) has no
+        // crossing behind the origin: its first entry is its nearest crossing.
+        if need == Need::FirstEntry
+            && t_enter > slack
+            && self.first_entry_ahead(ray, box_ray, (t_enter, slack), t_max, out)
+        {
+            return;
+        }
         SEARCH.with_borrow_mut(|(hits, queue)| {
             hits.clear();
             if need == Need::Overlapping && t_leave <= t_max {
@@ -1306,6 +1317,104 @@ impl TriMesh {
             self.crossings(ray, box_ray, hits);
             self.keep_overlapping(ray, hits, t_max, need, out);
         })
+    }
+
+    /// [`TriMesh::intervals_until`] for [`Need::FirstEntry`] on a line whose every crossing
+    /// lies ahead of the ray's origin, entering the mesh's bounds (grown by `slack`, the
+    /// rounding allowance of [`TriMesh::intervals_until`]) at `t_enter`: a nearest-box-first
+    /// search for the nearest crossing, on a plain stack, with no list of crossings kept in
+    /// order. Boxes beyond the nearest crossing found so far are not searched. True once the
+    /// answer is appended (or there is none before `t_max`); false, with nothing appended,
+    /// where the nearest crossing of a closed mesh does not settle it (an exit, an entry with
+    /// no crossing or box left behind it, or a second crossing at its point: a grazed rim),
+    /// which the general search then decides as it always has. As there, the second end of
+    /// the interval is a point inside it: the nearest of what lies beyond the entry.
+    fn first_entry_ahead(
+        &self,
+        ray: &Ray,
+        box_ray: &BoxRay,
+        (t_enter, slack): (f64, f64),
+        t_max: f64,
+        out: &mut Vec<(f64, f64)>,
+    ) -> bool {
+        let sheared = Sheared::of(ray);
+        let mut stack = [MaybeUninit::<Queued>::uninit(); STACK];
+        // The root's box holds the bounds: the line enters it no later.
+        stack[0].write((t_enter - slack, self.root.link, self.root.count));
+        let mut top = 1;
+        // The nearest crossing (in `crossing_order`), whether another one shares its point,
+        // and the nearest of the other crossings found and of the boxes left unsearched.
+        let mut first: Option<Crossing> = None;
+        let mut twin = false;
+        let mut beyond = f64::INFINITY;
+        while top > 0 {
+            top -= 1;
+            // SAFETY: every slot below `top` has been written (slot 0 above, the rest as
+            // boxes are pushed), and `top` only falls to slots written before.
+            let (t, link, count) = unsafe { stack[top].assume_init() };
+            // A box's crossings lie at or beyond its queued entry: none there can come first
+            // (or before `t_max`, while nothing is found).
+            if t > first.map_or(t_max, |f| f.t.min(t_max)) {
+                beyond = beyond.min(t);
+                continue;
+            }
+            if count == 0 {
+                let node = &self.nodes[link as usize];
+                // Nearest last, so that it is searched next.
+                let mut met = [(0.0, 0usize); WIDTH];
+                let mut n = 0;
+                for (j, e) in node.entries(box_ray, self.small).into_iter().enumerate() {
+                    if let Some(e) = e {
+                        let mut k = n;
+                        while k > 0 && met[k - 1].0 < e {
+                            met[k] = met[k - 1];
+                            k -= 1;
+                        }
+                        met[k] = (e, j);
+                        n += 1;
+                    }
+                }
+                for &(e, j) in &met[..n] {
+                    self.prefetch(node.link[j], node.count[j]);
+                    stack[top].write((e - slack, node.link[j], node.count[j]));
+                    top += 1;
+                }
+            } else {
+                let s = link as usize;
+                for corners in &self.corners_in_order[s..s + count as usize] {
+                    let [a, b, c] = *corners;
+                    let Some(h) = sheared.cross(a, b, c) else {
+                        continue;
+                    };
+                    match first {
+                        Some(f) if crossing_order(&h, &f).is_ge() => {
+                            twin |= h.t == f.t;
+                            beyond = beyond.min(h.t);
+                        }
+                        _ => {
+                            if let Some(f) = first {
+                                twin = h.t == f.t;
+                                beyond = beyond.min(f.t);
+                            }
+                            first = Some(h);
+                        }
+                    }
+                }
+            }
+        }
+        // Nothing before `t_max` (also where it is not a number): no answer, settled.
+        let Some(f) = first.filter(|f| f.t < t_max) else {
+            return true;
+        };
+        if !self.closed {
+            out.push((f.t, f.t + SURFACE_THICKNESS));
+            return true;
+        }
+        if f.entering && !twin && beyond < f64::INFINITY {
+            out.push((f.t, beyond));
+            return true;
+        }
+        false
     }
 
     /// Whether the sorted crossings `hits`, complete below `frontier`, settle what `need` asks
@@ -2086,8 +2195,8 @@ pub(crate) mod tests {
         /// The search that stops once the answer is settled gives what the whole line's
         /// intervals give: every interval overlapping `(0, t_max)` with its exact ends, or the
         /// first one's entry. Closed unions of overlapping shells (a grown bush, cubes and a
-        /// sphere), an open sheet; rays from inside and outside, through vertices and along
-        /// faces' planes; `t_max` from below zero to infinity.
+        /// sphere), an open sheet; rays from inside and outside the mesh and its bounds, through
+        /// vertices and along faces' planes; `t_max` from below zero to infinity.
         #[test]
         fn a_search_stopped_when_settled_gives_the_whole_lines_intervals(
             kind in 0usize..3,
@@ -2095,6 +2204,7 @@ pub(crate) mod tests {
             o in prop::array::uniform3(-1.0..4.0f64),
             d in prop::array::uniform3(-1.0..1.0f64),
             snap in 0usize..3,
+            back in prop_oneof![Just(0.0), 3.0..8.0f64],
             t_max in prop_oneof![-0.5..0.5f64, 0.0..6.0f64, Just(f64::INFINITY)],
         ) {
             let m = match kind {
@@ -2122,6 +2232,9 @@ pub(crate) mod tests {
             if snap == 2 {
                 dir = DVec3::X * dir.x.signum();
             }
+            // Stepped back along the ray, the origin is mostly outside the mesh's bounds (the
+            // search of a mesh wholly ahead); as drawn, mostly inside them.
+            origin -= dir.normalize() * back;
             let ray = Ray::new(origin, dir);
             let whole: Vec<(f64, f64)> = intervals(&m, &ray)
                 .into_iter()
