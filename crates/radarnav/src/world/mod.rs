@@ -97,6 +97,19 @@ fn insert_pending(
     pending.insert(at, iv);
 }
 
+/// Whether this is the first time ray `stamp` meets grid part `part` in the cells it walks
+/// (marking it met, in `reached`). In a world with meshes a part's bounds are tested before
+/// anything else of it, and a mesh spans many cells: met again, its bounds need no second
+/// test (a query's stretch only shrinks, so a mesh passed by stays passed by), and a part
+/// tested once is never tested again on the same ray anyway ([`RayQuery::stamps`]).
+#[inline(always)]
+fn first_visit(reached: &mut [u32], part: u32, stamp: u32) -> bool {
+    let last = &mut reached[part as usize];
+    let first = *last != stamp;
+    *last = stamp;
+    first
+}
+
 /// Reusable buffers for the ray queries of [`World`], so that casting many rays allocates
 /// nothing once they have grown.
 #[derive(Clone, Debug, Default)]
@@ -109,6 +122,8 @@ pub struct RayQuery {
     /// listed in several cells is tested once per ray ("mailboxing").
     stamps: Vec<u32>,
     stamp: u32,
+    /// Per part, the number of the last ray that met it walking the grid ([`first_visit`]).
+    reached: Vec<u32>,
     /// The current ray prepared for the mesh bounds tests (set only in a world with meshes).
     box_ray: BoxRay,
     /// Its stretch up to the query's `t_max` for [`BoxRay::may_meet_single`] (likewise).
@@ -120,10 +135,12 @@ impl RayQuery {
     fn next_ray(&mut self, slots: usize) {
         if self.stamps.len() < slots {
             self.stamps.resize(slots, 0);
+            self.reached.resize(slots, 0);
         }
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
             self.stamps.fill(0);
+            self.reached.fill(0);
             self.stamp = 1;
         }
         self.intervals.clear();
@@ -205,6 +222,9 @@ impl OrderedIntervals<'_, '_> {
                     return false;
                 };
                 for &part in world.grid.cell(cell) {
+                    if world.has_meshes && !first_visit(&mut self.q.reached, part, self.q.stamp) {
+                        continue;
+                    }
                     world.test_part(part, self.ray, self.t_max, self.by_parts, self.q);
                 }
                 self.frontier = t_exit;
@@ -717,6 +737,7 @@ impl World {
         let bit = band_bit(band);
         let mut best: Option<Interval> = None;
         let (stamps, stamp, spans, box_ray) = (&mut q.stamps, q.stamp, &mut q.spans, &q.box_ray);
+        let reached = &mut q.reached;
         let mut stretch = q.stretch;
         // Tests a part (objects not solid to the band are skipped) and keeps in `best`
         // whichever interval comes first in entry order.
@@ -766,6 +787,9 @@ impl World {
                 let mut walk = CellWalk::new(&self.grid, ray, t_max);
                 while let Some((cell, t_exit)) = walk.next_cell(&self.grid) {
                     for &part in self.grid.cell(cell) {
+                        if self.has_meshes && !first_visit(reached, part, stamp) {
+                            continue;
+                        }
                         if self.part_may_meet(part, box_ray, t_max, best, &mut stretch) {
                             test(part, &mut best);
                         }
