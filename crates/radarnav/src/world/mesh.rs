@@ -269,7 +269,7 @@ impl Node {
             let axis = |axis: usize, (t0, t1, inside)| {
                 let lo = _mm_loadu_ps(self.lo[axis].as_ptr());
                 let hi = _mm_loadu_ps(self.hi[axis].as_ptr());
-                if ray.parallel[axis] {
+                if ray.parallel(axis) {
                     let down = _mm_loadu_ps(b.origin_down[axis].as_ptr());
                     let up = _mm_loadu_ps(b.origin_up[axis].as_ptr());
                     let within = _mm_and_ps(_mm_cmple_ps(lo, up), _mm_cmple_ps(down, hi));
@@ -314,15 +314,15 @@ impl Node {
         let mut inside = [true; WIDTH];
         for axis in 0..3 {
             let (lo, hi) = (&self.lo[axis], &self.hi[axis]);
-            if ray.parallel[axis] {
+            let l = &ray.lanes;
+            if ray.parallel(axis) {
                 // Exact: against bounds in single precision, `lo <= o` is `lo <= o rounded up`.
-                let (down, up) = (ray.lanes.origin_down[axis], ray.lanes.origin_up[axis]);
+                let (down, up) = (l.origin_down[axis], l.origin_up[axis]);
                 for j in 0..WIDTH {
                     inside[j] &= lo[j] <= up && down <= hi[j];
                 }
                 continue;
             }
-            let l = &ray.lanes;
             let (o, inv, err) = (l.origin[axis], l.inv[axis], l.err[axis]);
             for j in 0..WIDTH {
                 let a = (lo[j] - o) * inv;
@@ -347,7 +347,6 @@ impl Node {
 /// repeated across four lanes for the node test.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct SingleRay {
-    parallel: [bool; 3],
     lanes: Lanes,
     /// Each axis' numbers in all four lanes, for [`Node::entries_single`].
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
@@ -400,7 +399,6 @@ impl SingleRay {
             let lane = |v: [f32; 3], fourth: f32| [v[0], v[1], v[2], fourth];
             let each = |v: [f32; 3]| v.map(|x| [x; 4]);
             Self {
-                parallel,
                 lanes: Lanes {
                     origin: lane(o32, 0.0),
                     origin_down: lane(down, 0.0),
@@ -735,7 +733,6 @@ struct Lanes {
     inv: [f32; 4],
     err: [f32; 4],
     /// All bits set on the axes the ray runs parallel to (the SSE test's mask).
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     parallel: [u32; 4],
     /// Whether it runs parallel to some axis.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
@@ -743,6 +740,12 @@ struct Lanes {
 }
 
 impl SingleRay {
+    /// Whether the ray runs parallel to `axis` (0–2): read from the lanes' mask.
+    #[inline(always)]
+    fn parallel(&self, axis: usize) -> bool {
+        self.lanes.parallel[axis] != 0
+    }
+
     /// The stretch `(t0, t1)` of the ray's line inside the box of `reach`, widened as in
     /// [`Node::entries_single`] (`t0 > t1`: it misses the box). Four lanes at once: the
     /// scalar form took a hundred instructions a box, with a branch per axis.
@@ -806,14 +809,13 @@ impl SingleRay {
         let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
         for axis in 0..3 {
             let (lo, hi) = (reach.lo[axis], reach.hi[axis]);
-            if self.parallel[axis] {
-                let l = &self.lanes;
+            let l = &self.lanes;
+            if self.parallel(axis) {
                 if !(lo <= l.origin_up[axis] && l.origin_down[axis] <= hi) {
                     return (f32::INFINITY, f32::NEG_INFINITY);
                 }
                 continue;
             }
-            let l = &self.lanes;
             let (o, inv, err) = (l.origin[axis], l.inv[axis], l.err[axis]);
             let (a, b) = ((lo - o) * inv, (hi - o) * inv);
             let (near, far) = if a < b { (a, b) } else { (b, a) };
