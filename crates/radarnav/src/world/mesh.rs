@@ -241,6 +241,44 @@ impl Node {
         })
     }
 
+    /// The children whose boxes the line of `ray` meets, as `(entry, child)` with the entry of
+    /// [`Node::entries`], farthest first (equal entries in child order), and how many: pushed
+    /// in this order, the nearest is searched next. In single precision the four are put in
+    /// order by a sorting network on integer keys, without a branch on the entries (an
+    /// insertion sort's branches were a quarter of a mesh search's mispredictions).
+    fn farthest_first(&self, ray: &BoxRay, single: bool) -> ([(f64, usize); WIDTH], usize) {
+        #[cfg(target_arch = "x86_64")]
+        if single && let Some(s) = &ray.single {
+            let (inside, entry) = self.entries_single_bits(s);
+            let used = (0..WIDTH).fold(0, |m, j| m | u32::from(self.link[j] != Self::NONE) << j);
+            let met = inside & used;
+            // A key that orders as the entries do, reversed (farthest first), the child's
+            // index in its low bits (child order among equal entries); a child not met sorts
+            // last. `+ 0.0` makes a zero positive, as `<` does not tell them apart.
+            let key = |j: usize| {
+                let bits = (entry[j] + 0.0).to_bits();
+                let ascending = if bits >> 31 == 1 {
+                    !bits
+                } else {
+                    bits | 1 << 31
+                };
+                let k = (u64::from(!ascending) << 32) | j as u64;
+                if met >> j & 1 == 1 { k } else { u64::MAX }
+            };
+            let mut k: [u64; WIDTH] = std::array::from_fn(key);
+            for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                let (x, y) = (k[a].min(k[b]), k[a].max(k[b]));
+                (k[a], k[b]) = (x, y);
+            }
+            let out = k.map(|k| {
+                let j = (k & 3) as usize;
+                (f64::from(entry[j]), j)
+            });
+            return (out, met.count_ones() as usize);
+        }
+        farthest_first(self.entries(ray, single))
+    }
+
     /// [`Node::entries`] in single precision: each axis' distances are widened by a bound on
     /// their error (the origin's rounding to `f32` times the reciprocal, plus a few units in
     /// the last place of the distance), so a box the line meets is never missed and its entry
@@ -250,6 +288,17 @@ impl Node {
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn entries_single(&self, ray: &SingleRay) -> [Option<f64>; WIDTH] {
+        let (inside, entry) = self.entries_single_bits(ray);
+        std::array::from_fn(|j| {
+            (inside & (1 << j) != 0 && self.link[j] != Self::NONE).then_some(entry[j].into())
+        })
+    }
+
+    /// [`Node::entries_single`] as a mask of the boxes met (bit `j` for child `j`, unused
+    /// children not cleared) and each box's entry.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn entries_single_bits(&self, ray: &SingleRay) -> (u32, [f32; WIDTH]) {
         use std::arch::x86_64::{
             _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_loadu_ps, _mm_max_ps,
             _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps,
@@ -300,9 +349,7 @@ impl Node {
             _mm_storeu_ps(entry.as_mut_ptr(), t0);
             _mm_movemask_ps(_mm_and_ps(inside, _mm_cmple_ps(t0, t1)))
         };
-        std::array::from_fn(|j| {
-            (inside & (1 << j) != 0 && self.link[j] != Self::NONE).then_some(entry[j].into())
-        })
+        (inside as u32, entry)
     }
 
     /// [`Node::entries_single`] lane by lane: where the SSE form is not written, and the
@@ -338,6 +385,25 @@ impl Node {
             (inside[j] && t0[j] <= t1[j] && self.link[j] != Self::NONE).then_some(t0[j].into())
         })
     }
+}
+
+/// The boxes met among `entries` (as from [`Node::entries`]), farthest first, equal entries in
+/// child order, and how many: an insertion sort, the reference [`Node::farthest_first`] keeps.
+fn farthest_first(entries: [Option<f64>; WIDTH]) -> ([(f64, usize); WIDTH], usize) {
+    let mut met = [(0.0, 0usize); WIDTH];
+    let mut n = 0;
+    for (j, e) in entries.into_iter().enumerate() {
+        if let Some(e) = e {
+            let mut k = n;
+            while k > 0 && met[k - 1].0 < e {
+                met[k] = met[k - 1];
+                k -= 1;
+            }
+            met[k] = (e, j);
+            n += 1;
+        }
+    }
+    (met, n)
 }
 
 /// A ray in single precision for [`Node::entries_single`]: its origin rounded (and rounded
@@ -535,6 +601,7 @@ impl Sheared {
     }
 
     /// A vertex relative to the ray, sheared: (x, y) across the ray, z along it (scaled).
+    #[inline(always)]
     fn vertex(&self, v: DVec3) -> DVec3 {
         // An array, not the vector, is indexed: a vector's index is a match per access.
         let p = (v - self.origin).to_array();
@@ -547,11 +614,28 @@ impl Sheared {
     }
 
     /// The crossing of the ray's whole line with triangle `abc`, if any.
+    #[inline(always)]
     fn cross(&self, a: DVec3, b: DVec3, c: DVec3) -> Option<Crossing> {
         let (a, b, c) = (self.vertex(a), self.vertex(b), self.vertex(c));
         // Edge functions: `edge(p, q)` for the edge p → q; reversed, the exact negative.
         let edge = |p: DVec3, q: DVec3| q.x * p.y - q.y * p.x;
         let (u, v, w) = (edge(b, c), edge(c, a), edge(a, b));
+        // No edge function zero (the usual case): the line crosses the inside exactly where
+        // all three share a sign, which is then the determinant's (a sum of numbers of one
+        // sign is never zero); the rules below give the same answer. Tested with `&`, not
+        // `&&`: one branch on the outcome, not one per edge (most of a search's mispredicted
+        // branches were these).
+        if (u != 0.0) & (v != 0.0) & (w != 0.0) {
+            let same = ((u > 0.0) & (v > 0.0) & (w > 0.0)) | ((u < 0.0) & (v < 0.0) & (w < 0.0));
+            if !same {
+                return None;
+            }
+            let det = u + v + w;
+            return Some(Crossing {
+                t: (u * a.z + v * b.z + w * c.z) / det,
+                entering: det > 0.0,
+            });
+        }
         let det = u + v + w;
         if det == 0.0 {
             return None; // seen edge-on (or degenerate): the line grazes it
@@ -1177,14 +1261,17 @@ impl TriMesh {
                 let leaf = self.corners_in_order.as_ptr().wrapping_add(link as usize);
                 (leaf.cast::<i8>(), count as usize * size_of::<[DVec3; 3]>())
             };
-            // A plain loop: `step_by` cost a tenth of a mesh search.
-            let mut offset = 0;
-            while offset < bytes {
+            // A fixed count of hints, each at most at the last byte: a loop to `bytes` was
+            // a mispredicted exit per box (a node is two lines, a leaf of four triangles
+            // spans at most six).
+            const LINES: usize = (LEAF_SIZE * size_of::<[DVec3; 3]>()).div_ceil(64) + 1;
+            for line in 0..LINES {
                 // SAFETY: a prefetch is only a hint: it reads nothing the program sees and
                 // cannot fault, whatever the address (the pointer is never dereferenced). SSE,
                 // which it needs, is part of every x86-64 processor.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(offset)) };
-                offset += 64;
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add((line * 64).min(bytes - 1)))
+                };
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
@@ -1328,9 +1415,10 @@ impl TriMesh {
     /// order. Boxes beyond the nearest crossing found so far are not searched. True once the
     /// answer is appended (or there is none before `t_max`); false, with nothing appended,
     /// where the nearest crossing of a closed mesh does not settle it (an exit, an entry with
-    /// no crossing or box left behind it, or a second crossing at its point: a grazed rim),
-    /// which the general search then decides as it always has. As there, the second end of
-    /// the interval is a point inside it: the nearest of what lies beyond the entry.
+    /// no crossing or box left behind it, or a second crossing at its point or within rounding
+    /// of it: a grazed rim), which the general search then decides as it always has. As there,
+    /// the second end of the interval is a point inside it: the nearest of what lies beyond
+    /// the entry.
     fn first_entry_ahead(
         &self,
         ray: &Ray,
@@ -1344,10 +1432,10 @@ impl TriMesh {
         // The root's box holds the bounds: the line enters it no later.
         stack[0].write((t_enter - slack, self.root.link, self.root.count));
         let mut top = 1;
-        // The nearest crossing (in `crossing_order`), whether another one shares its point,
-        // and the nearest of the other crossings found and of the boxes left unsearched.
+        // The nearest crossing (in `crossing_order`), the nearest of the other crossings
+        // found, and the nearest of those and of the boxes left unsearched.
         let mut first: Option<Crossing> = None;
-        let mut twin = false;
+        let mut next = f64::INFINITY;
         let mut beyond = f64::INFINITY;
         while top > 0 {
             top -= 1;
@@ -1363,19 +1451,7 @@ impl TriMesh {
             if count == 0 {
                 let node = &self.nodes[link as usize];
                 // Nearest last, so that it is searched next.
-                let mut met = [(0.0, 0usize); WIDTH];
-                let mut n = 0;
-                for (j, e) in node.entries(box_ray, self.small).into_iter().enumerate() {
-                    if let Some(e) = e {
-                        let mut k = n;
-                        while k > 0 && met[k - 1].0 < e {
-                            met[k] = met[k - 1];
-                            k -= 1;
-                        }
-                        met[k] = (e, j);
-                        n += 1;
-                    }
-                }
+                let (met, n) = node.farthest_first(box_ray, self.small);
                 for &(e, j) in &met[..n] {
                     self.prefetch(node.link[j], node.count[j]);
                     stack[top].write((e - slack, node.link[j], node.count[j]));
@@ -1390,12 +1466,12 @@ impl TriMesh {
                     };
                     match first {
                         Some(f) if crossing_order(&h, &f).is_ge() => {
-                            twin |= h.t == f.t;
+                            next = next.min(h.t);
                             beyond = beyond.min(h.t);
                         }
                         _ => {
                             if let Some(f) = first {
-                                twin = h.t == f.t;
+                                next = next.min(f.t);
                                 beyond = beyond.min(f.t);
                             }
                             first = Some(h);
@@ -1412,6 +1488,11 @@ impl TriMesh {
             out.push((f.t, f.t + SURFACE_THICKNESS));
             return true;
         }
+        // Another crossing at the same point, or within rounding of it (a vertex or edge the
+        // line grazes, its crossings computed from different triangles), leaves it to the
+        // general search. Every crossing within `slack` of the first has been found: a box
+        // is skipped only where it begins more than `slack` past the nearest crossing.
+        let twin = next - f.t <= slack;
         if f.entering && !twin && beyond < f64::INFINITY {
             out.push((f.t, beyond));
             return true;
@@ -2300,6 +2381,7 @@ pub(crate) mod tests {
             behind in -30.0..30.0f64,
             flat in 0..5usize,
             t_max in prop_oneof![0.0..1.0f64, -40.0..40.0f64, Just(f64::INFINITY)],
+            same in any::<bool>(),
         ) {
             let origin = DVec3::from(origin);
             // Boxes about a point near the origin; the line aims at a corner, edge midpoint or
@@ -2331,6 +2413,17 @@ pub(crate) mod tests {
             let node = Node::of(&children);
             let exact = node.entries(&box_ray, false);
             let single = node.entries(&box_ray, true);
+            // The sorting network orders the boxes met as the insertion sort does (child
+            // order among equal entries: `same` repeats the first box).
+            let (met, n) = node.farthest_first(&box_ray, true);
+            let (want, m) = farthest_first(single);
+            prop_assert_eq!(&met[..n], &want[..m]);
+            if same {
+                let twins = Node::of(&[children[0], children[0], children[0]]);
+                let (met, n) = twins.farthest_first(&box_ray, true);
+                let (want, m) = farthest_first(twins.entries(&box_ray, true));
+                prop_assert_eq!(&met[..n], &want[..m]);
+            }
             if let Some(s) = &box_ray.single {
                 // The SSE form is the scalar one, to the bit.
                 prop_assert_eq!(single, node.entries_single_scalar(s));
