@@ -148,6 +148,11 @@ impl Grid {
         )
     }
 
+    /// How many cells the grid has (cell indices run below it).
+    pub(crate) fn cell_count(&self) -> usize {
+        self.nx * self.ny
+    }
+
     /// The ids listed in cell `c`.
     pub(crate) fn cell(&self, c: usize) -> &[u32] {
         &self.items[self.starts[c] as usize..self.starts[c + 1] as usize]

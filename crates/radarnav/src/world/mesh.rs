@@ -245,27 +245,48 @@ impl Node {
     /// [`Node::entries`], farthest first (equal entries in child order), and how many: pushed
     /// in this order, the nearest is searched next. In single precision the four are put in
     /// order by a sorting network on integer keys, without a branch on the entries (an
-    /// insertion sort's branches were a quarter of a mesh search's mispredictions).
+    /// insertion sort's branches were a quarter of a mesh search's mispredictions); children
+    /// not met sort last, past the count.
     fn farthest_first(&self, ray: &BoxRay, single: bool) -> ([(f64, usize); WIDTH], usize) {
         #[cfg(target_arch = "x86_64")]
         if single && let Some(s) = &ray.single {
-            let (inside, entry) = self.entries_single_bits(s);
-            let used = (0..WIDTH).fold(0, |m, j| m | u32::from(self.link[j] != Self::NONE) << j);
-            let met = inside & used;
-            // A key that orders as the entries do, reversed (farthest first), the child's
-            // index in its low bits (child order among equal entries); a child not met sorts
-            // last. `+ 0.0` makes a zero positive, as `<` does not tell them apart.
-            let key = |j: usize| {
-                let bits = (entry[j] + 0.0).to_bits();
-                let ascending = if bits >> 31 == 1 {
-                    !bits
-                } else {
-                    bits | 1 << 31
-                };
-                let k = (u64::from(!ascending) << 32) | j as u64;
-                if met >> j & 1 == 1 { k } else { u64::MAX }
+            use std::arch::x86_64::{
+                _mm_add_ps, _mm_and_si128, _mm_castps_si128, _mm_castsi128_ps, _mm_cmpeq_epi32,
+                _mm_loadu_ps, _mm_loadu_si128, _mm_movemask_ps, _mm_or_si128, _mm_set_epi32,
+                _mm_set1_epi32, _mm_setzero_ps, _mm_srai_epi32, _mm_storeu_si128, _mm_xor_si128,
             };
-            let mut k: [u64; WIDTH] = std::array::from_fn(key);
+            let (inside, entry) = self.entries_single_bits(s);
+            // A key per child that orders as the entries do, reversed (farthest first), and
+            // all bits set for a child not met (or unused), which then sorts last; its index
+            // goes in the low bits below (child order among equal entries). `+ 0.0` makes a
+            // zero positive, as `<` does not tell them apart. Four at once in SSE registers.
+            let mut keys = [0u32; WIDTH];
+            // SAFETY: SSE and SSE2, which these intrinsics need, are part of every x86-64
+            // processor. The loads read the 16 bytes of `entry` and of `self.link` (`[f32; 4]`,
+            // `[u32; 4]`), the store writes the 16 bytes of `keys` (unaligned forms).
+            let met = unsafe {
+                let none = _mm_cmpeq_epi32(
+                    _mm_loadu_si128(self.link.as_ptr().cast()),
+                    _mm_set1_epi32(-1),
+                );
+                let used = !(_mm_movemask_ps(_mm_castsi128_ps(none)) as u32) & 0xf;
+                let met = inside & used;
+                let lane = _mm_set_epi32(8, 4, 2, 1);
+                let met_lanes =
+                    _mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(met as i32), lane), lane);
+                let bits =
+                    _mm_castps_si128(_mm_add_ps(_mm_loadu_ps(entry.as_ptr()), _mm_setzero_ps()));
+                // Ascending order of the floats as unsigned integers: a negative number's bits
+                // all flipped, a positive number's sign bit set; reversed, all flipped again.
+                let flip = _mm_or_si128(_mm_srai_epi32::<31>(bits), _mm_set1_epi32(i32::MIN));
+                let descending = _mm_xor_si128(_mm_xor_si128(bits, flip), _mm_set1_epi32(-1));
+                let all = _mm_set1_epi32(-1);
+                let key = _mm_or_si128(descending, _mm_xor_si128(met_lanes, all));
+                _mm_storeu_si128(keys.as_mut_ptr().cast(), key);
+                met
+            };
+            let mut k: [u64; WIDTH] =
+                std::array::from_fn(|j| (u64::from(keys[j]) << 32) | j as u64);
             for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
                 let (x, y) = (k[a].min(k[b]), k[a].max(k[b]));
                 (k[a], k[b]) = (x, y);
@@ -279,12 +300,7 @@ impl Node {
         farthest_first(self.entries(ray, single))
     }
 
-    /// [`Node::entries`] in single precision: each axis' distances are widened by a bound on
-    /// their error (the origin's rounding to `f32` times the reciprocal, plus a few units in
-    /// the last place of the distance), so a box the line meets is never missed and its entry
-    /// is never put too far. The four boxes in the four lanes of SSE registers, operation for
-    /// operation as `Node::entries_single_scalar` (the same result to the bit): the
-    /// compiler did not vectorise that loop, and it took 160 instructions a node.
+    /// [`Node::entries`] in single precision, conservative ([`boxes_single`]).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn entries_single(&self, ray: &SingleRay) -> [Option<f64>; WIDTH] {
@@ -299,57 +315,7 @@ impl Node {
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn entries_single_bits(&self, ray: &SingleRay) -> (u32, [f32; WIDTH]) {
-        use std::arch::x86_64::{
-            _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_loadu_ps, _mm_max_ps,
-            _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps,
-            _mm_sub_ps,
-        };
-        let b = &ray.broadcast;
-        let mut entry = [0.0f32; WIDTH];
-        // SAFETY: SSE and SSE2, which these intrinsics need, are part of every x86-64
-        // processor (the target enables them). Each load reads the 16 bytes of one
-        // `[f32; 4]` behind a reference, the store writes the 16 bytes of `entry` (unaligned
-        // forms: no alignment needed).
-        let inside = unsafe {
-            let abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
-            let rel = _mm_set1_ps(SingleRay::RELATIVE);
-            // One axis narrows each box's stretch `(t0, t1)` and its `inside` mask. Called
-            // for the three axes in turn, unrolled (as a loop it was not).
-            let axis = |axis: usize, (t0, t1, inside)| {
-                let lo = _mm_loadu_ps(self.lo[axis].as_ptr());
-                let hi = _mm_loadu_ps(self.hi[axis].as_ptr());
-                if ray.parallel(axis) {
-                    let down = _mm_loadu_ps(b.origin_down[axis].as_ptr());
-                    let up = _mm_loadu_ps(b.origin_up[axis].as_ptr());
-                    let within = _mm_and_ps(_mm_cmple_ps(lo, up), _mm_cmple_ps(down, hi));
-                    return (t0, t1, _mm_and_ps(inside, within));
-                }
-                let o = _mm_loadu_ps(b.origin[axis].as_ptr());
-                let inv = _mm_loadu_ps(b.inv[axis].as_ptr());
-                let err = _mm_loadu_ps(b.err[axis].as_ptr());
-                let a = _mm_mul_ps(_mm_sub_ps(lo, o), inv);
-                let c = _mm_mul_ps(_mm_sub_ps(hi, o), inv);
-                // `minps(x, y)` is `x < y ? x : y` and `maxps(x, y)` is `x > y ? x : y`, so
-                // each line below is the scalar form's comparison, NaN included.
-                let near = _mm_min_ps(a, c);
-                let far = _mm_max_ps(c, a);
-                let near = _mm_sub_ps(
-                    near,
-                    _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(near, abs), rel)),
-                );
-                let far = _mm_add_ps(far, _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(far, abs), rel)));
-                (_mm_max_ps(near, t0), _mm_min_ps(far, t1), inside)
-            };
-            let all = (
-                _mm_set1_ps(f32::NEG_INFINITY),
-                _mm_set1_ps(f32::INFINITY),
-                _mm_castsi128_ps(_mm_set1_epi32(-1)),
-            );
-            let (t0, t1, inside) = axis(2, axis(1, axis(0, all)));
-            _mm_storeu_ps(entry.as_mut_ptr(), t0);
-            _mm_movemask_ps(_mm_and_ps(inside, _mm_cmple_ps(t0, t1)))
-        };
-        (inside as u32, entry)
+        boxes_single::<false>(&self.lo, &self.hi, ray, (0.0, 0.0))
     }
 
     /// [`Node::entries_single`] lane by lane: where the SSE form is not written, and the
@@ -385,6 +351,85 @@ impl Node {
             (inside[j] && t0[j] <= t1[j] && self.link[j] != Self::NONE).then_some(t0[j].into())
         })
     }
+}
+
+/// Four boxes, given axis by axis (`lo[axis][box]`, `hi[axis][box]`), against the line of
+/// `ray` in single precision: a mask of those it meets (bit `j` for box `j`) and where it
+/// enters each. Each axis' distances are widened by a bound on their error (the origin's
+/// rounding to `f32` times the reciprocal, plus a few units in the last place of the
+/// distance), so a box the line meets is never missed and its entry is never put too far.
+/// With `STRETCH`, a box counts as met only where its stretch of the line overlaps `s0..=s1`
+/// (the test of [`BoxRay::may_meet_single`], four boxes at once). The four boxes in the four
+/// lanes of SSE registers, operation for operation as `Node::entries_single_scalar` (the same
+/// result to the bit): the compiler did not vectorise that loop, and it took 160
+/// instructions a node.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn boxes_single<const STRETCH: bool>(
+    lo: &[[f32; WIDTH]; 3],
+    hi: &[[f32; WIDTH]; 3],
+    ray: &SingleRay,
+    (s0, s1): (f32, f32),
+) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::{
+        _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_loadu_ps, _mm_max_ps,
+        _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps,
+        _mm_sub_ps,
+    };
+    let b = &ray.broadcast;
+    let mut entry = [0.0f32; WIDTH];
+    // SAFETY: SSE and SSE2, which these intrinsics need, are part of every x86-64
+    // processor (the target enables them). Each load reads the 16 bytes of one
+    // `[f32; 4]` behind a reference, the store writes the 16 bytes of `entry` (unaligned
+    // forms: no alignment needed).
+    let met = unsafe {
+        let abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
+        let rel = _mm_set1_ps(SingleRay::RELATIVE);
+        // One axis narrows each box's stretch `(t0, t1)` and its `inside` mask. Called
+        // for the three axes in turn, unrolled (as a loop it was not).
+        let axis = |axis: usize, (t0, t1, inside)| {
+            let lo = _mm_loadu_ps(lo[axis].as_ptr());
+            let hi = _mm_loadu_ps(hi[axis].as_ptr());
+            if ray.parallel(axis) {
+                let down = _mm_loadu_ps(b.origin_down[axis].as_ptr());
+                let up = _mm_loadu_ps(b.origin_up[axis].as_ptr());
+                let within = _mm_and_ps(_mm_cmple_ps(lo, up), _mm_cmple_ps(down, hi));
+                return (t0, t1, _mm_and_ps(inside, within));
+            }
+            let o = _mm_loadu_ps(b.origin[axis].as_ptr());
+            let inv = _mm_loadu_ps(b.inv[axis].as_ptr());
+            let err = _mm_loadu_ps(b.err[axis].as_ptr());
+            let a = _mm_mul_ps(_mm_sub_ps(lo, o), inv);
+            let c = _mm_mul_ps(_mm_sub_ps(hi, o), inv);
+            // `minps(x, y)` is `x < y ? x : y` and `maxps(x, y)` is `x > y ? x : y`, so
+            // each line below is the scalar form's comparison, NaN included.
+            let near = _mm_min_ps(a, c);
+            let far = _mm_max_ps(c, a);
+            let near = _mm_sub_ps(
+                near,
+                _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(near, abs), rel)),
+            );
+            let far = _mm_add_ps(far, _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(far, abs), rel)));
+            (_mm_max_ps(near, t0), _mm_min_ps(far, t1), inside)
+        };
+        let all = (
+            _mm_set1_ps(f32::NEG_INFINITY),
+            _mm_set1_ps(f32::INFINITY),
+            _mm_castsi128_ps(_mm_set1_epi32(-1)),
+        );
+        let (t0, t1, inside) = axis(2, axis(1, axis(0, all)));
+        _mm_storeu_ps(entry.as_mut_ptr(), t0);
+        let mut met = _mm_and_ps(inside, _mm_cmple_ps(t0, t1));
+        if STRETCH {
+            let within = _mm_and_ps(
+                _mm_cmple_ps(t0, _mm_set1_ps(s1)),
+                _mm_cmple_ps(_mm_set1_ps(s0), t1),
+            );
+            met = _mm_and_ps(met, within);
+        }
+        _mm_movemask_ps(met)
+    };
+    (met as u32, entry)
 }
 
 /// The boxes met among `entries` (as from [`Node::entries`]), farthest first, equal entries in
@@ -722,6 +767,61 @@ impl SingleReach {
     };
 }
 
+/// The [`SingleReach`]es of up to four parts side by side, axis by axis as a node holds its
+/// children's boxes, with the parts' ids: a grid cell's parts in this form are tested four at
+/// once ([`BoxRay::may_meet_group`]), with one branch on the outcome where one part at a time
+/// took a branch per part, each mispredicted about as often as not.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct ReachGroup {
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    part: [u32; WIDTH],
+    /// Bit `j` set where lane `j` holds a part.
+    used: u32,
+}
+
+impl ReachGroup {
+    /// The group of `parts` (at most four: id and reach), in their order.
+    pub fn of(parts: &[(u32, SingleReach)]) -> Self {
+        assert!(
+            parts.len() <= WIDTH,
+            "a reach group holds at most {WIDTH} parts"
+        );
+        let mut g = Self {
+            lo: [[0.0; WIDTH]; 3],
+            hi: [[0.0; WIDTH]; 3],
+            part: [u32::MAX; WIDTH],
+            used: 0,
+        };
+        for (j, (part, reach)) in parts.iter().enumerate() {
+            for axis in 0..3 {
+                g.lo[axis][j] = reach.lo[axis];
+                g.hi[axis][j] = reach.hi[axis];
+            }
+            g.part[j] = *part;
+            g.used |= 1 << j;
+        }
+        g
+    }
+
+    /// The part in lane `j`.
+    pub fn part(&self, j: usize) -> u32 {
+        self.part[j]
+    }
+
+    /// Lane `j`'s reach.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    fn reach(&self, j: usize) -> SingleReach {
+        let mut r = SingleReach::UNBOUNDED;
+        for axis in 0..3 {
+            r.lo[axis] = self.lo[axis][j];
+            r.hi[axis] = self.hi[axis][j];
+        }
+        r
+    }
+}
+
 impl Reach {
     /// Stretches up to this long (`|t_max|`, m) are tested by [`BoxRay::may_meet_single`];
     /// longer ones always pass it.
@@ -795,6 +895,28 @@ impl BoxRay {
                 t0 <= t1 && t0 <= s1 && s0 <= t1
             }
             _ => true,
+        }
+    }
+}
+
+impl BoxRay {
+    /// [`BoxRay::may_meet_single`] for the parts of `group`, four at once: bit `j` set where
+    /// lane `j` holds a part that passes (the same answer, part by part: a property test).
+    #[inline(always)]
+    pub fn may_meet_group(&self, group: &ReachGroup, stretch: &SingleStretch) -> u32 {
+        match (&self.single, stretch.ends) {
+            #[cfg(target_arch = "x86_64")]
+            (Some(ray), Some(ends)) => {
+                boxes_single::<true>(&group.lo, &group.hi, ray, ends).0 & group.used
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            (Some(_), Some(_)) => {
+                (0..WIDTH).fold(0, |m, j| {
+                    let pass = self.may_meet_single(&group.reach(j), stretch);
+                    m | u32::from(pass) << j
+                }) & group.used
+            }
+            _ => group.used,
         }
     }
 }
@@ -2434,6 +2556,29 @@ pub(crate) mod tests {
                 if reach.may_meet(&box_ray, t_max) {
                     let stretch = box_ray.single_stretch(t_max);
                     prop_assert!(box_ray.may_meet_single(&reach.single(), &stretch), "{:?}", c);
+                }
+            }
+            // Four parts' reaches at once give each part's answer (an unbounded reach, as a
+            // part that is not a mesh has, among them when `same`), for stretches that end
+            // before, inside and past the boxes, and for every stretch.
+            let mut reaches: Vec<(u32, SingleReach)> = (children.iter().enumerate())
+                .map(|(j, c)| (10 + j as u32, Reach::of((c.lo(), c.hi())).single()))
+                .collect();
+            if same {
+                reaches[0].1 = SingleReach::UNBOUNDED;
+            }
+            let group = ReachGroup::of(&reaches);
+            for stretch in [
+                box_ray.single_stretch(t_max),
+                box_ray.single_stretch(0.5 * behind.abs()),
+                SingleStretch::default(),
+            ] {
+                let met = box_ray.may_meet_group(&group, &stretch);
+                prop_assert_eq!(met >> reaches.len(), 0);
+                for (j, (part, reach)) in reaches.iter().enumerate() {
+                    prop_assert_eq!(group.part(j), *part);
+                    let one = box_ray.may_meet_single(reach, &stretch);
+                    prop_assert_eq!(met >> j & 1 == 1, one, "lane {} of {:?}", j, stretch);
                 }
             }
             for j in 0..children.len() {

@@ -110,6 +110,38 @@ fn first_visit(reached: &mut [u32], part: u32, stamp: u32) -> bool {
     first
 }
 
+/// Remakes `stretch` for the first-hit query's current bound: `t_max`, or just past the
+/// `best` entry found so far.
+#[inline(always)]
+fn refresh_stretch(
+    box_ray: &BoxRay,
+    t_max: f64,
+    best: Option<Interval>,
+    stretch: &mut SingleStretch,
+) {
+    let t_max = best.map_or(t_max, |b| t_max.min(b.t_in.next_up()));
+    if t_max != stretch.t_max() {
+        *stretch = box_ray.single_stretch(t_max);
+    }
+}
+
+/// Each cell's parts of `grid` as [`mesh::ReachGroup`]s of their reaches, in the cell's
+/// order, and where each cell's groups begin (one entry more than there are cells).
+fn reach_groups(grid: &Grid, reach: &[mesh::SingleReach]) -> (Vec<mesh::ReachGroup>, Vec<u32>) {
+    let mut groups = Vec::new();
+    let mut starts = Vec::with_capacity(grid.cell_count() + 1);
+    for c in 0..grid.cell_count() {
+        starts.push(groups.len() as u32);
+        for four in grid.cell(c).chunks(4) {
+            let parts: Vec<(u32, mesh::SingleReach)> =
+                four.iter().map(|&p| (p, reach[p as usize])).collect();
+            groups.push(mesh::ReachGroup::of(&parts));
+        }
+    }
+    starts.push(groups.len() as u32);
+    (groups, starts)
+}
+
 /// Reusable buffers for the ray queries of [`World`], so that casting many rays allocates
 /// nothing once they have grown.
 #[derive(Clone, Debug, Default)]
@@ -221,11 +253,23 @@ impl OrderedIntervals<'_, '_> {
                     self.frontier = f64::INFINITY;
                     return false;
                 };
-                for &part in world.grid.cell(cell) {
-                    if world.has_meshes && !first_visit(&mut self.q.reached, part, self.q.stamp) {
-                        continue;
+                if world.has_meshes {
+                    // A cell's parts four at once, as in `World::first_solid`.
+                    let (a, b) = (world.group_starts[cell], world.group_starts[cell + 1]);
+                    for group in &world.reach_groups[a as usize..b as usize] {
+                        let mut met = self.q.box_ray.may_meet_group(group, &self.q.stretch);
+                        while met != 0 {
+                            let part = group.part(met.trailing_zeros() as usize);
+                            met &= met - 1;
+                            if first_visit(&mut self.q.reached, part, self.q.stamp) {
+                                world.file_part(part, self.ray, self.t_max, self.by_parts, self.q);
+                            }
+                        }
                     }
-                    world.test_part(part, self.ray, self.t_max, self.by_parts, self.q);
+                } else {
+                    for &part in world.grid.cell(cell) {
+                        world.test_part(part, self.ray, self.t_max, self.by_parts, self.q);
+                    }
                 }
                 self.frontier = t_exit;
             }
@@ -345,6 +389,11 @@ pub struct World {
     /// [`mesh::SingleReach::UNBOUNDED`]: what a ray query tests a mesh part against before
     /// anything else of it (only in a world with meshes; [`World::reach_passes`]).
     part_reach: Vec<mesh::SingleReach>,
+    /// In a world with meshes, per grid cell the [`mesh::ReachGroup`]s of the parts it lists
+    /// (in its order, four to a group): cell `c`'s are
+    /// `reach_groups[group_starts[c]..group_starts[c + 1]]`. Empty without meshes.
+    reach_groups: Vec<mesh::ReachGroup>,
+    group_starts: Vec<u32>,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
     parts: Vec<Part>,
@@ -411,7 +460,7 @@ impl World {
             }
         }
         let grid = Grid::new(&rects);
-        let part_reach = parts
+        let part_reach: Vec<mesh::SingleReach> = parts
             .iter()
             .map(|p| {
                 mesh_reach[p.object as usize]
@@ -419,6 +468,12 @@ impl World {
                     .map_or(mesh::SingleReach::UNBOUNDED, mesh::Reach::single)
             })
             .collect();
+        let has_meshes = mesh_reach.iter().any(Option::is_some);
+        let (reach_groups, group_starts) = if has_meshes {
+            reach_groups(&grid, &part_reach)
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let part_rects = rects.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
         let ground = materials.id("ground").expect("built-ins are never removed");
         let laser_aerosols = objects
@@ -452,9 +507,11 @@ impl World {
             materials,
             objects,
             aabbs,
-            has_meshes: mesh_reach.iter().any(Option::is_some),
+            has_meshes,
             mesh_reach,
             part_reach,
+            reach_groups,
+            group_starts,
             solid,
             parts,
             part_rects,
@@ -594,9 +651,14 @@ impl World {
     // Inlined into both callers: the call's own frame cost about a tenth of a forest ray.
     #[inline(always)]
     fn test_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
-        if !self.reach_passes(part, &q.box_ray, &q.stretch) {
-            return;
+        if self.reach_passes(part, &q.box_ray, &q.stretch) {
+            self.file_part(part, ray, t_max, by_parts, q);
         }
+    }
+
+    /// [`World::test_part`] for a part known to pass [`World::reach_passes`].
+    #[inline(always)]
+    fn file_part(&self, part: u32, ray: &Ray, t_max: f64, by_parts: u8, q: &mut RayQuery) {
         let pending = &mut q.intervals;
         // The interval goes on field by field, in registers: handed over whole, it went
         // through memory, its fields written one by one and read back sixteen bytes at a time,
@@ -786,11 +848,24 @@ impl World {
             None => {
                 let mut walk = CellWalk::new(&self.grid, ray, t_max);
                 while let Some((cell, t_exit)) = walk.next_cell(&self.grid) {
-                    for &part in self.grid.cell(cell) {
-                        if self.has_meshes && !first_visit(reached, part, stamp) {
-                            continue;
+                    if self.has_meshes {
+                        // A cell's parts four at once: the stretch shrinks as `best` moves, so
+                        // a group's answer (taken on the stretch at its start) may pass more
+                        // than the part-by-part test would, never fewer.
+                        let (a, b) = (self.group_starts[cell], self.group_starts[cell + 1]);
+                        for group in &self.reach_groups[a as usize..b as usize] {
+                            refresh_stretch(box_ray, t_max, best, &mut stretch);
+                            let mut met = box_ray.may_meet_group(group, &stretch);
+                            while met != 0 {
+                                let part = group.part(met.trailing_zeros() as usize);
+                                met &= met - 1;
+                                if first_visit(reached, part, stamp) {
+                                    test(part, &mut best);
+                                }
+                            }
                         }
-                        if self.part_may_meet(part, box_ray, t_max, best, &mut stretch) {
+                    } else {
+                        for &part in self.grid.cell(cell) {
                             test(part, &mut best);
                         }
                     }
@@ -820,10 +895,7 @@ impl World {
         if !self.has_meshes {
             return true;
         }
-        let t_max = best.map_or(t_max, |b| t_max.min(b.t_in.next_up()));
-        if t_max != stretch.t_max() {
-            *stretch = box_ray.single_stretch(t_max);
-        }
+        refresh_stretch(box_ray, t_max, best, stretch);
         self.reach_passes(part, box_ray, stretch)
     }
 
@@ -849,8 +921,12 @@ impl World {
         spans: &mut Vec<(f64, f64)>,
         mut take: impl FnMut(Interval),
     ) {
-        // The cells along a ray list many meshes it passes by: their bounds first.
-        if let Some(reach) = &self.mesh_reach[index as usize]
+        // The cells along a ray list many meshes it passes by: their bounds first. The
+        // accelerated queries (`need` given) have tested them already, in single precision
+        // ([`World::reach_passes`], [`BoxRay::may_meet_group`]); the double-precision test
+        // turns away few more and cost a tenth of a laser ray's mesh search.
+        if need.is_none()
+            && let Some(reach) = &self.mesh_reach[index as usize]
             && !reach.may_meet(box_ray, t_max)
         {
             return;
