@@ -372,9 +372,8 @@ fn boxes_single<const STRETCH: bool>(
     (s0, s1): (f32, f32),
 ) -> (u32, [f32; WIDTH]) {
     use std::arch::x86_64::{
-        _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_loadu_ps, _mm_max_ps,
-        _mm_min_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps,
-        _mm_sub_ps,
+        _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_loadu_ps, _mm_max_ps, _mm_min_ps,
+        _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps, _mm_sub_ps,
     };
     let b = &ray.broadcast;
     let mut entry = [0.0f32; WIDTH];
@@ -383,8 +382,6 @@ fn boxes_single<const STRETCH: bool>(
     // `[f32; 4]` behind a reference, the store writes the 16 bytes of `entry` (unaligned
     // forms: no alignment needed).
     let met = unsafe {
-        let abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
-        let rel = _mm_set1_ps(SingleRay::RELATIVE);
         // One axis narrows each box's stretch `(t0, t1)` and its `inside` mask. Called
         // for the three axes in turn, unrolled (as a loop it was not).
         let axis = |axis: usize, (t0, t1, inside)| {
@@ -405,11 +402,7 @@ fn boxes_single<const STRETCH: bool>(
             // each line below is the scalar form's comparison, NaN included.
             let near = _mm_min_ps(a, c);
             let far = _mm_max_ps(c, a);
-            let near = _mm_sub_ps(
-                near,
-                _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(near, abs), rel)),
-            );
-            let far = _mm_add_ps(far, _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(far, abs), rel)));
+            let (near, far) = widen(near, far, err);
             (_mm_max_ps(near, t0), _mm_min_ps(far, t1), inside)
         };
         let all = (
@@ -430,6 +423,35 @@ fn boxes_single<const STRETCH: bool>(
         _mm_movemask_ps(met)
     };
     (met as u32, entry)
+}
+
+/// Four stretches `(near, far)` of single-precision distances along a line, each end moved
+/// outward by its error bound: `err` (the origin's rounding times the reciprocal) plus
+/// [`SingleRay::RELATIVE`] of its size. The one widening of every single-precision box test
+/// ([`boxes_single`], `SingleRay::stretch_in`), so that none narrows a box the line meets.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn widen(
+    near: std::arch::x86_64::__m128,
+    far: std::arch::x86_64::__m128,
+    err: std::arch::x86_64::__m128,
+) -> (std::arch::x86_64::__m128, std::arch::x86_64::__m128) {
+    use std::arch::x86_64::{
+        _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps,
+        _mm_sub_ps,
+    };
+    // SAFETY: SSE and SSE2, which these intrinsics need, are part of every x86-64 processor;
+    // no memory is read or written.
+    unsafe {
+        let abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
+        let rel = _mm_set1_ps(SingleRay::RELATIVE);
+        let near = _mm_sub_ps(
+            near,
+            _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(near, abs), rel)),
+        );
+        let far = _mm_add_ps(far, _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(far, abs), rel)));
+        (near, far)
+    }
 }
 
 /// The boxes met among `entries` (as from [`Node::entries`]), farthest first, equal entries in
@@ -959,9 +981,9 @@ impl SingleRay {
     #[inline(always)]
     fn stretch_in(&self, reach: &SingleReach) -> (f32, f32) {
         use std::arch::x86_64::{
-            _mm_add_ps, _mm_and_ps, _mm_andnot_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_cvtss_f32,
-            _mm_loadu_ps, _mm_loadu_si128, _mm_max_ps, _mm_min_ps, _mm_movehl_ps, _mm_mul_ps,
-            _mm_or_ps, _mm_set1_epi32, _mm_set1_ps, _mm_shuffle_ps, _mm_sub_ps,
+            _mm_and_ps, _mm_andnot_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_cvtss_f32, _mm_loadu_ps,
+            _mm_loadu_si128, _mm_max_ps, _mm_min_ps, _mm_movehl_ps, _mm_mul_ps, _mm_or_ps,
+            _mm_set1_ps, _mm_shuffle_ps, _mm_sub_ps,
         };
         let l = &self.lanes;
         // SAFETY: SSE and SSE2, which these intrinsics need, are part of every x86-64
@@ -975,15 +997,7 @@ impl SingleRay {
             let err = _mm_loadu_ps(l.err.as_ptr());
             let a = _mm_mul_ps(_mm_sub_ps(lo, o), inv);
             let b = _mm_mul_ps(_mm_sub_ps(hi, o), inv);
-            let abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
-            let rel = _mm_set1_ps(Self::RELATIVE);
-            let near = _mm_min_ps(a, b);
-            let far = _mm_max_ps(a, b);
-            let near = _mm_sub_ps(
-                near,
-                _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(near, abs), rel)),
-            );
-            let far = _mm_add_ps(far, _mm_add_ps(err, _mm_mul_ps(_mm_and_ps(far, abs), rel)));
+            let (near, far) = widen(_mm_min_ps(a, b), _mm_max_ps(a, b), err);
             // A parallel axis: the whole line if the origin is within the box's extent, else
             // none of it (rare: the branch goes the same way for every box of a ray).
             let (near, far) = if l.any_parallel {
