@@ -258,6 +258,7 @@ impl OrderedIntervals<'_, '_> {
                     let (a, b) = (world.group_starts[cell], world.group_starts[cell + 1]);
                     for group in &world.reach_groups[a as usize..b as usize] {
                         let mut met = self.q.box_ray.may_meet_group(group, &self.q.stretch);
+                        world.prefetch_group(group, met);
                         while met != 0 {
                             let part = group.part(met.trailing_zeros() as usize);
                             met &= met - 1;
@@ -394,6 +395,9 @@ pub struct World {
     /// `reach_groups[group_starts[c]..group_starts[c + 1]]`. Empty without meshes.
     reach_groups: Vec<mesh::ReachGroup>,
     group_starts: Vec<u32>,
+    /// Per part, where a search of its mesh begins to read (default for other shapes): asked
+    /// of the memory when a ray passes the part's reach.
+    search_starts: Vec<mesh::SearchStart>,
     /// Per object, bit `band_bit(b)` set when its material is solid to band `b`.
     solid: Vec<u8>,
     parts: Vec<Part>,
@@ -474,6 +478,12 @@ impl World {
         } else {
             (Vec::new(), Vec::new())
         };
+        let search_starts = (parts.iter())
+            .map(|p| match &objects[p.object as usize].shape {
+                Shape::Mesh(m) => mesh::SearchStart::of(m),
+                _ => mesh::SearchStart::default(),
+            })
+            .collect();
         let part_rects = rects.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
         let ground = materials.id("ground").expect("built-ins are never removed");
         let laser_aerosols = objects
@@ -512,6 +522,7 @@ impl World {
             part_reach,
             reach_groups,
             group_starts,
+            search_starts,
             solid,
             parts,
             part_rects,
@@ -856,6 +867,7 @@ impl World {
                         for group in &self.reach_groups[a as usize..b as usize] {
                             refresh_stretch(box_ray, t_max, best, &mut stretch);
                             let mut met = box_ray.may_meet_group(group, &stretch);
+                            self.prefetch_group(group, met);
                             while met != 0 {
                                 let part = group.part(met.trailing_zeros() as usize);
                                 met &= met - 1;
@@ -877,6 +889,20 @@ impl World {
             }
         }
         best.map(|b| (b.t_in, b.material))
+    }
+
+    /// Asks the memory for what the searches of the parts of `group` in `met` (bit `j` for its
+    /// part `j`) read first, before the first of them begins.
+    #[inline(always)]
+    fn prefetch_group(&self, group: &mesh::ReachGroup, mut met: u32) {
+        while met != 0 {
+            let part = group.part(met.trailing_zeros() as usize);
+            met &= met - 1;
+            self.search_starts[part as usize].prefetch();
+            // The object, whose shape leads to the mesh.
+            let object = self.parts[part as usize].object as usize;
+            mesh::prefetch_line(self.objects.as_ptr().wrapping_add(object));
+        }
     }
 
     /// Whether part `part` may hold what [`World::first_solid`] looks for, given the `best`
