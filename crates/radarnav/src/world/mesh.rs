@@ -2299,9 +2299,6 @@ pub(crate) mod tests {
         }
     }
 
-    /// Triangles the surface area heuristic cannot cut (every centre at one point) and one it
-    /// would cut off alone at every level: the hierarchy falls back to median splits, stays
-    /// within its search stack, and a ray finds every sheet.
     /// The hints point at what a search reads first: the mesh itself, and its root's node
     /// (or, for a mesh of one leaf, its triangles).
     #[test]
@@ -2331,6 +2328,9 @@ pub(crate) mod tests {
         start.prefetch();
     }
 
+    /// Triangles the surface area heuristic cannot cut (every centre at one point) and one it
+    /// would cut off alone at every level: the hierarchy falls back to median splits, stays
+    /// within its search stack, and a ray finds every sheet.
     #[test]
     fn a_hierarchy_of_triangles_no_cut_separates_is_still_searched_whole() {
         let (mut v, mut t) = (Vec::new(), Vec::new());
