@@ -149,6 +149,14 @@ impl Grid {
     }
 
     /// How many cells the grid has (cell indices run below it).
+    /// Where the grid's arrays lie in memory ([`super::pages::span`]).
+    pub(crate) fn spans(&self) -> [(usize, usize); 2] {
+        [
+            super::pages::span(&self.starts),
+            super::pages::span(&self.items),
+        ]
+    }
+
     pub(crate) fn cell_count(&self) -> usize {
         self.nx * self.ny
     }

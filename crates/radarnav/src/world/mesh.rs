@@ -1461,6 +1461,15 @@ impl TriMesh {
         }
     }
 
+    /// Where the arrays a ray search reads lie in memory: the nodes and the triangles'
+    /// corners ([`super::pages::span`]).
+    pub(crate) fn search_spans(&self) -> [(usize, usize); 2] {
+        [
+            super::pages::span(&self.nodes),
+            super::pages::span(&self.corners_in_order),
+        ]
+    }
+
     /// Where what the box `(link, count)` holds lies in memory, and its size: node `link`
     /// (`count` 0), or the leaf's triangles from `link`. For memory hints only.
     #[inline(always)]

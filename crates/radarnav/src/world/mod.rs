@@ -6,6 +6,7 @@ mod grid;
 pub mod material;
 pub mod mesh;
 pub mod overlap;
+mod pages;
 pub mod procedural;
 pub mod shape;
 
@@ -478,7 +479,7 @@ impl World {
         } else {
             (Vec::new(), Vec::new())
         };
-        let search_starts = (parts.iter())
+        let search_starts: Vec<mesh::SearchStart> = (parts.iter())
             .map(|p| match &objects[p.object as usize].shape {
                 Shape::Mesh(m) => mesh::SearchStart::of(m),
                 _ => mesh::SearchStart::default(),
@@ -510,6 +511,21 @@ impl World {
                 }
             })
             .collect();
+        // A ray through a large mesh world reads a few lines of many pages: ask for huge
+        // pages under what it reads, so those reads stop waiting on page walks.
+        if has_meshes {
+            let meshes = objects.iter().filter_map(|o| match &o.shape {
+                Shape::Mesh(m) => Some(m.search_spans()),
+                _ => None,
+            });
+            pages::collapse(meshes.flatten().chain(grid.spans()).chain([
+                pages::span(&parts),
+                pages::span(&part_reach),
+                pages::span(&reach_groups),
+                pages::span(&search_starts),
+                pages::span(&objects),
+            ]));
+        }
         Self {
             laser_aerosols,
             binary,
