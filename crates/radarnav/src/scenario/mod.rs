@@ -594,14 +594,25 @@ fn build_mesh(
                 ),
             ));
         }
-        out.push(Object {
-            name: match (&spec.name, &part.material) {
-                (Some(n), Some(p)) => Some(format!("{n}/{p}")),
-                (n, _) => n.clone(),
-            },
-            shape: Shape::Mesh(std::sync::Arc::new(mesh)),
-            material: id,
-        });
+        let name = match (&spec.name, &part.material) {
+            (Some(n), Some(p)) => Some(format!("{n}/{p}")),
+            (n, _) => n.clone(),
+        };
+        // A file's closed part of shells far apart (a whole scene exported as one mesh) goes
+        // into the world piece by piece, each found through the grid like any object; the
+        // generated plants are kept whole, as they always were.
+        let pieces = if ms.file.is_some() {
+            mesh.into_apart()
+        } else {
+            vec![mesh]
+        };
+        for piece in pieces {
+            out.push(Object {
+                name: name.clone(),
+                shape: Shape::Mesh(std::sync::Arc::new(piece)),
+                material: id,
+            });
+        }
     }
     Ok(out)
 }

@@ -516,6 +516,12 @@ fn mesh_dir() -> std::path::PathBuf {
     .unwrap();
     std::fs::write(dir.join("cube.mtl"), "newmtl bark\nnewmtl leaves\n").unwrap();
     std::fs::write(dir.join("sheet.obj"), format!("{}f 1 2 6 5\n", cube(0))).unwrap();
+    // Two closed cubes, 4 m apart, in one part.
+    std::fs::write(
+        dir.join("rocks.obj"),
+        format!("{}{}{}{}", cube(0), cube(5), faces(0), faces(8)),
+    )
+    .unwrap();
     dir
 }
 
@@ -562,6 +568,32 @@ fn a_mesh_is_read_beside_the_scenario_placed_and_split_into_its_parts() {
     // The sheet turned 90°: it now stands in the y-z plane at x = 0.
     let (lo, hi) = objs[2].shape.aabb();
     assert!(lo.x.abs() < 1e-12 && hi.x.abs() < 1e-12, "{lo} {hi}");
+}
+
+#[test]
+fn a_files_closed_shells_far_apart_become_objects_of_one_name() {
+    let dir = mesh_dir();
+    let s = parse_in(
+        &dir,
+        "[[object]]\nname = \"rocks\"\nmaterial = \"concrete\"\nmesh = { file = \"rocks.obj\" }\n",
+    )
+    .unwrap();
+    let objs = s.world.objects();
+    assert_eq!(objs.len(), 2);
+    assert!(objs.iter().all(|o| o.name.as_deref() == Some("rocks")));
+    let boxes: Vec<_> = objs.iter().map(|o| o.shape.aabb()).collect();
+    assert_eq!(boxes[0], (DVec3::ZERO, DVec3::ONE));
+    assert_eq!(
+        boxes[1],
+        (DVec3::new(0.0, 0.0, 5.0), DVec3::new(1.0, 1.0, 6.0))
+    );
+    // A ray up through both meets each once, where the whole mesh had its two stretches.
+    let ray = crate::world::Ray::new(DVec3::new(0.5, 0.5, -1.0), DVec3::Z);
+    let mut q = crate::world::RayQuery::default();
+    let found: Vec<(f64, f64)> = (s.world.ray_intervals_exhaustive(&ray, 10.0, &mut q).iter())
+        .map(|iv| (iv.t_in, iv.t_out))
+        .collect();
+    assert_eq!(found, [(1.0, 2.0), (6.0, 7.0)]);
 }
 
 #[test]

@@ -29,6 +29,11 @@ use super::shape::{OrientedBox, Ray};
 /// Thickness given to an open mesh's surface at each crossing, m.
 pub const SURFACE_THICKNESS: f64 = 1e-6;
 
+/// How many sheets' thickness behind the origin a search of an open mesh still looks: its
+/// crossings further back cannot join a sheet that reaches past the origin unless one lies
+/// in between ([`TriMesh::intervals_until`]).
+const BEHIND_SHEETS: f64 = 4.0;
+
 /// Most triangles in one mesh (DESIGN §12).
 pub const MAX_TRIANGLES: usize = crate::limits::MESH_TRIANGLES.max as usize;
 
@@ -209,13 +214,15 @@ impl Node {
     /// misses the box or there is no child): all four at once, axis by axis. In single
     /// precision when the ray allows it ([`BoxRay::single`]) and `single` (the mesh's
     /// coordinates are small enough), with bounds that keep it conservative; else in double
-    /// precision with the arithmetic of [`BoxRay::line_entry`].
-    fn entries(&self, ray: &BoxRay, single: bool) -> [Option<f64>; WIDTH] {
+    /// precision with the arithmetic of [`BoxRay::line_entry`]. Boxes the line leaves before
+    /// the parameter `from` count as missed (all the line's boxes for `-∞`; kept where
+    /// rounding leaves it in doubt).
+    fn entries(&self, ray: &BoxRay, single: bool, from: f64) -> [Option<f64>; WIDTH] {
         if single && let Some(s) = &ray.single {
             #[cfg(target_arch = "x86_64")]
-            return self.entries_single(s);
+            return self.entries_single(s, from);
             #[cfg(not(target_arch = "x86_64"))]
-            return self.entries_single_scalar(s);
+            return self.entries_single_scalar(s, from);
         }
         let mut t0 = [f64::NEG_INFINITY; WIDTH];
         let mut t1 = [f64::INFINITY; WIDTH];
@@ -238,7 +245,8 @@ impl Node {
             }
         }
         std::array::from_fn(|j| {
-            (inside[j] && t0[j] <= t1[j] && self.link[j] != Self::NONE).then_some(t0[j])
+            let met = inside[j] && t0[j] <= t1[j] && from <= t1[j];
+            (met && self.link[j] != Self::NONE).then_some(t0[j])
         })
     }
 
@@ -248,7 +256,12 @@ impl Node {
     /// order by a sorting network on integer keys, without a branch on the entries (an
     /// insertion sort's branches were a quarter of a mesh search's mispredictions); children
     /// not met sort last, past the count.
-    fn farthest_first(&self, ray: &BoxRay, single: bool) -> ([(f64, usize); WIDTH], usize) {
+    fn farthest_first(
+        &self,
+        ray: &BoxRay,
+        single: bool,
+        from: f64,
+    ) -> ([(f64, usize); WIDTH], usize) {
         #[cfg(target_arch = "x86_64")]
         if single && let Some(s) = &ray.single {
             use std::arch::x86_64::{
@@ -256,7 +269,7 @@ impl Node {
                 _mm_loadu_ps, _mm_loadu_si128, _mm_movemask_ps, _mm_or_si128, _mm_set_epi32,
                 _mm_set1_epi32, _mm_setzero_ps, _mm_srai_epi32, _mm_storeu_si128, _mm_xor_si128,
             };
-            let (inside, entry) = self.entries_single_bits(s);
+            let (inside, entry) = self.entries_single_bits(s, from);
             // A key per child that orders as the entries do, reversed (farthest first), and
             // all bits set for a child not met (or unused), which then sorts last; its index
             // goes in the low bits below (child order among equal entries). `+ 0.0` makes a
@@ -298,14 +311,14 @@ impl Node {
             });
             return (out, met.count_ones() as usize);
         }
-        farthest_first(self.entries(ray, single))
+        farthest_first(self.entries(ray, single, from))
     }
 
     /// [`Node::entries`] in single precision, conservative ([`boxes_single`]).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn entries_single(&self, ray: &SingleRay) -> [Option<f64>; WIDTH] {
-        let (inside, entry) = self.entries_single_bits(ray);
+    fn entries_single(&self, ray: &SingleRay, from: f64) -> [Option<f64>; WIDTH] {
+        let (inside, entry) = self.entries_single_bits(ray, from);
         std::array::from_fn(|j| {
             (inside & (1 << j) != 0 && self.link[j] != Self::NONE).then_some(entry[j].into())
         })
@@ -315,14 +328,20 @@ impl Node {
     /// children not cleared) and each box's entry.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn entries_single_bits(&self, ray: &SingleRay) -> (u32, [f32; WIDTH]) {
-        boxes_single::<false>(&self.lo, &self.hi, ray, (0.0, 0.0))
+    fn entries_single_bits(&self, ray: &SingleRay, from: f64) -> (u32, [f32; WIDTH]) {
+        // The usual whole line without the cut's two comparisons.
+        if from == f64::NEG_INFINITY {
+            boxes_single::<false>(&self.lo, &self.hi, ray, (0.0, 0.0))
+        } else {
+            boxes_single::<true>(&self.lo, &self.hi, ray, (f32_down(from), f32::INFINITY))
+        }
     }
 
     /// [`Node::entries_single`] lane by lane: where the SSE form is not written, and the
     /// reference it is tested against.
     #[cfg(any(test, not(target_arch = "x86_64")))]
-    fn entries_single_scalar(&self, ray: &SingleRay) -> [Option<f64>; WIDTH] {
+    fn entries_single_scalar(&self, ray: &SingleRay, from: f64) -> [Option<f64>; WIDTH] {
+        let from = f32_down(from);
         let mut t0 = [f32::NEG_INFINITY; WIDTH];
         let mut t1 = [f32::INFINITY; WIDTH];
         let mut inside = [true; WIDTH];
@@ -349,7 +368,8 @@ impl Node {
             }
         }
         std::array::from_fn(|j| {
-            (inside[j] && t0[j] <= t1[j] && self.link[j] != Self::NONE).then_some(t0[j].into())
+            let met = inside[j] && t0[j] <= t1[j] && from <= t1[j];
+            (met && self.link[j] != Self::NONE).then_some(t0[j].into())
         })
     }
 }
@@ -1191,6 +1211,90 @@ impl TriMesh {
         self.boundary_edges
     }
 
+    /// A closed mesh cut into pieces that lie apart: its connected shells, grouped wherever
+    /// their bounds meet (nested or overlapping shells stay one volume), so that no line
+    /// passes through two pieces over one stretch. Each piece is closed, its triangles wound
+    /// as here, and every ray's intervals are those of the whole (a line's crossings of one
+    /// piece all lie within that piece's bounds, apart from the others'); but a ray query
+    /// finds each piece in the world's grid instead of searching one hierarchy spread over
+    /// the whole scene, behind the sensor as well. An open mesh, or one of a single group,
+    /// is returned whole.
+    pub fn into_apart(self) -> Vec<TriMesh> {
+        if !self.closed || self.triangles.len() < 2 {
+            return vec![self];
+        }
+        // Shells: triangles joined by shared vertices.
+        let mut shells = UnionFind::new(self.vertices.len());
+        for t in &self.triangles {
+            shells.union(t[0] as usize, t[1] as usize);
+            shells.union(t[0] as usize, t[2] as usize);
+        }
+        let mut shell_of_root: HashMap<usize, usize> = HashMap::new();
+        let mut boxes: Vec<(DVec3, DVec3)> = Vec::new();
+        let shell: Vec<usize> = (self.triangles.iter())
+            .map(|t| {
+                let root = shells.find(t[0] as usize);
+                let next = shell_of_root.len();
+                let k = *shell_of_root.entry(root).or_insert(next);
+                if k == boxes.len() {
+                    boxes.push((DVec3::INFINITY, DVec3::NEG_INFINITY));
+                }
+                for &i in t {
+                    let v = self.vertices[i as usize];
+                    boxes[k] = (boxes[k].0.min(v), boxes[k].1.max(v));
+                }
+                k
+            })
+            .collect();
+        // Groups: shells whose boxes meet (touching counts), by a sweep along x.
+        let mut groups = UnionFind::new(boxes.len());
+        let mut by_x: Vec<usize> = (0..boxes.len()).collect();
+        by_x.sort_by(|&a, &b| boxes[a].0.x.total_cmp(&boxes[b].0.x));
+        let mut open: Vec<usize> = Vec::new();
+        for &k in &by_x {
+            let (lo, hi) = boxes[k];
+            open.retain(|&j| boxes[j].1.x >= lo.x);
+            for &j in &open {
+                let (a, b) = boxes[j];
+                if a.y <= hi.y && lo.y <= b.y && a.z <= hi.z && lo.z <= b.z {
+                    groups.union(j, k);
+                }
+            }
+            open.push(k);
+        }
+        let mut group_of_root: HashMap<usize, usize> = HashMap::new();
+        // Per piece: its vertices, its triangles, and where each of this mesh's vertices went.
+        type Piece = (Vec<DVec3>, Vec<[u32; 3]>, HashMap<u32, u32>);
+        let mut pieces: Vec<Piece> = Vec::new();
+        for (t, &k) in self.triangles.iter().zip(&shell) {
+            let root = groups.find(k);
+            let next = group_of_root.len();
+            let g = *group_of_root.entry(root).or_insert(next);
+            if g == pieces.len() {
+                pieces.push((Vec::new(), Vec::new(), HashMap::new()));
+            }
+            let (vertices, triangles, index) = &mut pieces[g];
+            let t = t.map(|i| {
+                *index.entry(i).or_insert_with(|| {
+                    vertices.push(self.vertices[i as usize]);
+                    (vertices.len() - 1) as u32
+                })
+            });
+            triangles.push(t);
+        }
+        if pieces.len() < 2 {
+            return vec![self];
+        }
+        let apart: Result<Vec<TriMesh>, MeshError> = (pieces.into_iter())
+            .map(|(v, t, _)| TriMesh::new(v, t))
+            .collect();
+        match apart {
+            Ok(apart) if apart.iter().all(TriMesh::is_closed) => apart,
+            // Not expected (each shell of a closed mesh is closed); whole is always right.
+            _ => vec![self],
+        }
+    }
+
     /// Why the mesh is not closed, in words (empty when it is).
     pub fn why_open(&self) -> String {
         match (self.closed, self.boundary_edges) {
@@ -1488,7 +1592,7 @@ impl TriMesh {
         let sheared = Sheared::of(ray);
         self.visit_nodes(
             box_ray.line_entry(self.root.lo(), self.root.hi()).is_some(),
-            |node| node.entries(box_ray, self.small).map(|e| e.is_some()),
+            |node| (node.entries(box_ray, self.small, f64::NEG_INFINITY)).map(|e| e.is_some()),
             |k| {
                 let [a, b, c] = self.corners_in_order[k];
                 out.extend(sheared.cross(a, b, c));
@@ -1542,17 +1646,35 @@ impl TriMesh {
         let Some((t_enter, t_leave)) = box_ray.stretch_in(lo - slack, hi + slack, whole) else {
             return;
         };
+        // Every interval ends at a crossing, or a sheet's thickness past one, and every
+        // crossing lies within the bounds: a mesh the line leaves behind the origin has none
+        // reaching ahead of it.
+        if t_leave < -SURFACE_THICKNESS {
+            return;
+        }
+        // A closed mesh needs the crossings behind the origin (they say whether it starts
+        // inside), an open one does not: its sheets that reach past the origin are those of
+        // the crossings ahead, unless a crossing lies within a few sheets' thickness of the
+        // origin (then the search falls back to the whole line). So a search from inside an
+        // open mesh's bounds (a robot in a building) skips every box the line leaves before
+        // `from` and every crossing there.
+        let from = if self.closed || t_enter > slack {
+            f64::NEG_INFINITY
+        } else {
+            -(BEHIND_SHEETS * SURFACE_THICKNESS + slack)
+        };
         // A mesh wholly ahead of the ray (the usual case for a sensor outside it) has no
-        // crossing behind the origin: its first entry is its nearest crossing.
+        // crossing behind the origin, nor an open one past the cut: its first entry is its
+        // nearest crossing.
         if need == Need::FirstEntry
-            && t_enter > slack
-            && self.first_entry_ahead(ray, box_ray, (t_enter, slack), t_max, out)
+            && (t_enter > slack || from > f64::NEG_INFINITY)
+            && self.first_entry_ahead(ray, box_ray, (t_enter, slack), from, t_max, out)
         {
             return;
         }
         SEARCH.with_borrow_mut(|(hits, queue)| {
             hits.clear();
-            if need == Need::Overlapping && t_leave <= t_max {
+            if need == Need::Overlapping && t_leave <= t_max && from == f64::NEG_INFINITY {
                 // Every crossing lies before `t_max`: all of them are needed (but those behind
                 // the origin, rarely many), so the plain search is the cheaper.
                 self.crossings(ray, box_ray, hits);
@@ -1573,7 +1695,7 @@ impl TriMesh {
             // The search settles nothing new before the frontier reaches `recheck` or a
             // crossing is found.
             let mut recheck = f64::NEG_INFINITY;
-            loop {
+            'search: loop {
                 // Every crossing not found yet lies at or beyond the nearest node left.
                 let frontier = queue.last().map_or(f64::INFINITY, |&(t, _, _)| t);
                 if frontier >= recheck {
@@ -1589,7 +1711,8 @@ impl TriMesh {
                 };
                 if count == 0 {
                     let node = &self.nodes[link as usize];
-                    for (j, t) in node.entries(box_ray, self.small).into_iter().enumerate() {
+                    let entries = node.entries(box_ray, self.small, from);
+                    for (j, t) in entries.into_iter().enumerate() {
                         if let Some(t) = t {
                             self.prefetch(node.link[j], node.count[j]);
                             enqueue(t, node.link[j], node.count[j], queue);
@@ -1600,6 +1723,13 @@ impl TriMesh {
                     for corners in &self.corners_in_order[s..s + count as usize] {
                         let [a, b, c] = *corners;
                         if let Some(h) = sheared.cross(a, b, c) {
+                            if h.t < from {
+                                continue;
+                            }
+                            // Near the origin the sheets behind it may matter.
+                            if h.t <= 0.0 && from > f64::NEG_INFINITY {
+                                break 'search;
+                            }
                             let at = hits.partition_point(|x| crossing_order(x, &h).is_lt());
                             hits.insert(at, h);
                             recheck = f64::NEG_INFINITY;
@@ -1615,11 +1745,13 @@ impl TriMesh {
 
     /// [`TriMesh::intervals_until`] for [`Need::FirstEntry`] on a line whose every crossing
     /// lies ahead of the ray's origin, entering the mesh's bounds (grown by `slack`, the
-    /// rounding allowance of [`TriMesh::intervals_until`]) at `t_enter`: a nearest-box-first
-    /// search for the nearest crossing, on a plain stack, with no list of crossings kept in
-    /// order. Boxes beyond the nearest crossing found so far are not searched. True once the
-    /// answer is appended (or there is none before `t_max`); false, with nothing appended,
-    /// where the nearest crossing of a closed mesh does not settle it (an exit, an entry with
+    /// rounding allowance of [`TriMesh::intervals_until`]) at `t_enter`, or of an open mesh
+    /// whose crossings before `from` do not matter: a nearest-box-first search for the
+    /// nearest crossing at or past `from`, on a plain stack, with no list of crossings kept in
+    /// order. Boxes beyond the nearest crossing found so far, and boxes the line leaves before
+    /// `from`, are not searched. True once the answer is appended (or there is none before
+    /// `t_max`); false, with nothing appended, where the nearest crossing does not settle it
+    /// (of an open mesh: one at or behind the origin; of a closed mesh: an exit, an entry with
     /// no crossing or box left behind it, or a second crossing at its point or within rounding
     /// of it: a grazed rim), which the general search then decides as it always has. As there,
     /// the second end of the interval is a point inside it: the nearest of what lies beyond
@@ -1629,6 +1761,7 @@ impl TriMesh {
         ray: &Ray,
         box_ray: &BoxRay,
         (t_enter, slack): (f64, f64),
+        from: f64,
         t_max: f64,
         out: &mut Vec<(f64, f64)>,
     ) -> bool {
@@ -1656,7 +1789,7 @@ impl TriMesh {
             if count == 0 {
                 let node = &self.nodes[link as usize];
                 // Nearest last, so that it is searched next.
-                let (met, n) = node.farthest_first(box_ray, self.small);
+                let (met, n) = node.farthest_first(box_ray, self.small, from);
                 for &(e, j) in &met[..n] {
                     self.prefetch(node.link[j], node.count[j]);
                     stack[top].write((e - slack, node.link[j], node.count[j]));
@@ -1666,7 +1799,7 @@ impl TriMesh {
                 let s = link as usize;
                 for corners in &self.corners_in_order[s..s + count as usize] {
                     let [a, b, c] = *corners;
-                    let Some(h) = sheared.cross(a, b, c) else {
+                    let Some(h) = sheared.cross(a, b, c).filter(|h| h.t >= from) else {
                         continue;
                     };
                     match first {
@@ -1690,6 +1823,10 @@ impl TriMesh {
             return true;
         };
         if !self.closed {
+            // A sheet at the origin or just behind it may join sheets further back.
+            if f.t <= 0.0 {
+                return false;
+            }
             out.push((f.t, f.t + SURFACE_THICKNESS));
             return true;
         }
@@ -2140,10 +2277,46 @@ fn triangle_meets_box(a: DVec3, b: DVec3, c: DVec3, body: &OrientedBox) -> bool 
         .any(|&u| edges.iter().any(|&e| separated(u.cross(e))))
 }
 
+/// Disjoint sets of `0..n`, with path halving and union by size.
+struct UnionFind {
+    parent: Vec<usize>,
+    size: Vec<usize>,
+}
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n).collect(),
+            size: vec![1; n],
+        }
+    }
+
+    fn find(&mut self, mut x: usize) -> usize {
+        while self.parent[x] != x {
+            self.parent[x] = self.parent[self.parent[x]];
+            x = self.parent[x];
+        }
+        x
+    }
+
+    fn union(&mut self, a: usize, b: usize) {
+        let (mut a, mut b) = (self.find(a), self.find(b));
+        if a == b {
+            return;
+        }
+        if self.size[a] < self.size[b] {
+            std::mem::swap(&mut a, &mut b);
+        }
+        self.parent[b] = a;
+        self.size[a] += self.size[b];
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
     use proptest::prelude::*;
+    use rand::{Rng, SeedableRng};
 
     /// An icosphere-like UV sphere: `stacks` × `slices` quads, poles as fans; closed.
     pub(crate) fn uv_sphere(center: DVec3, r: f64, stacks: u32, slices: u32) -> TriMesh {
@@ -2202,6 +2375,54 @@ pub(crate) mod tests {
         let mut out = Vec::new();
         m.ray_intervals(ray, &mut out);
         out
+    }
+
+    #[test]
+    fn a_closed_mesh_comes_apart_where_its_shells_lie_apart_and_only_there() {
+        let join = |parts: &[TriMesh]| {
+            let (mut v, mut t) = (Vec::new(), Vec::new());
+            for m in parts {
+                let base = v.len() as u32;
+                v.extend_from_slice(m.vertices());
+                t.extend(m.triangles().iter().map(|x| x.map(|i| i + base)));
+            }
+            TriMesh::new(v, t).expect("a mesh")
+        };
+        let a = cube(DVec3::ZERO, DVec3::ONE, false);
+        let far = cube(DVec3::splat(5.0), DVec3::splat(6.0), true);
+        let inner = uv_sphere(DVec3::splat(0.5), 0.3, 5, 8);
+        // Face to face with `a`, sharing no vertex.
+        let touching = cube(DVec3::new(1.0, 0.2, 0.2), DVec3::new(2.0, 0.8, 0.8), false);
+        let counts = |m: TriMesh| {
+            let (total, closed) = (m.triangle_count(), m.is_closed());
+            let pieces = m.into_apart();
+            assert!(pieces.iter().all(|p| p.is_closed() == closed));
+            assert_eq!(
+                pieces.iter().map(TriMesh::triangle_count).sum::<usize>(),
+                total
+            );
+            pieces.len()
+        };
+        assert_eq!(counts(join(&[a.clone(), far.clone()])), 2);
+        // A shell inside another is one volume with it (a cavity, or a nested part).
+        assert_eq!(counts(join(&[a.clone(), inner.clone(), far.clone()])), 2);
+        // Boxes that touch stay together; a single shell is whole.
+        assert_eq!(counts(join(&[a.clone(), touching])), 1);
+        assert_eq!(counts(a.clone()), 1);
+        // An open mesh is never cut.
+        let sheet = TriMesh::new(
+            vec![
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::Y,
+                DVec3::splat(9.0),
+                DVec3::new(10.0, 9.0, 9.0),
+                DVec3::new(9.0, 10.0, 9.0),
+            ],
+            vec![[0, 1, 2], [3, 4, 5]],
+        )
+        .expect("two sheets");
+        assert_eq!(counts(sheet), 1);
     }
 
     #[test]
@@ -2461,6 +2682,34 @@ pub(crate) mod tests {
             }
         }
 
+        /// A closed mesh's pieces apart ([`TriMesh::into_apart`]) give together the whole's
+        /// intervals on every line (rays through vertices and along faces' planes too): two
+        /// cubes (one wound inward in the file) and a sphere overlapping one of them make two
+        /// pieces.
+        #[test]
+        fn the_pieces_apart_give_the_wholes_intervals(
+            o in prop::array::uniform3(-1.0..4.0f64),
+            d in prop::array::uniform3(-1.0..1.0f64),
+            snap in 0usize..3,
+        ) {
+            let whole = two_cubes();
+            let pieces = whole.clone().into_apart();
+            prop_assert_eq!(pieces.len(), 2);
+            prop_assume!(DVec3::from(d).length() > 0.1);
+            let mut origin = DVec3::from(o);
+            if snap == 1 {
+                origin = origin.round();
+            }
+            let mut dir = DVec3::from(d);
+            if snap == 2 {
+                dir = DVec3::X * dir.x.signum();
+            }
+            let ray = Ray::new(origin, dir);
+            let mut apart: Vec<(f64, f64)> = pieces.iter().flat_map(|p| intervals(p, &ray)).collect();
+            apart.sort_by(|a, b| a.0.total_cmp(&b.0));
+            prop_assert_eq!(apart, intervals(&whole, &ray), "{:?}", ray);
+        }
+
         /// A ray that the mesh's [`Reach`] turns away has no interval overlapping `(0, t_max)`, from
         /// anywhere (inside the bounds too), for open and closed meshes; and the single-precision
         /// node bounds hold every vertex of their triangles.
@@ -2513,16 +2762,24 @@ pub(crate) mod tests {
         /// intervals give: every interval overlapping `(0, t_max)` with its exact ends, or the
         /// first one's entry. Closed unions of overlapping shells (a grown bush, cubes and a
         /// sphere), an open sheet; rays from inside and outside the mesh and its bounds, through
-        /// vertices and along faces' planes; `t_max` from below zero to infinity.
+        /// vertices and along faces' planes; `t_max` from below zero to infinity. Open meshes
+        /// of many triangles too (a bush with faces taken out, a soup of loose leaves), whose
+        /// search from inside their bounds skips what lies behind the origin, with rays that
+        /// pass a triangle at, just before or just behind the origin (`near`).
         #[test]
         fn a_search_stopped_when_settled_gives_the_whole_lines_intervals(
-            kind in 0usize..3,
+            kind in 0usize..5,
             seed in 0u64..50,
             o in prop::array::uniform3(-1.0..4.0f64),
             d in prop::array::uniform3(-1.0..1.0f64),
             snap in 0usize..3,
             back in prop_oneof![Just(0.0), 3.0..8.0f64],
             t_max in prop_oneof![-0.5..0.5f64, 0.0..6.0f64, Just(f64::INFINITY)],
+            near in prop_oneof![
+                Just(None),
+                prop::sample::select(vec![0.0, 1e-7, -1e-7, 1.5e-6, -1.5e-6, -3e-6, -5e-6, 2e-9])
+                    .prop_map(Some),
+            ],
         ) {
             let m = match kind {
                 0 => two_cubes(),
@@ -2532,12 +2789,38 @@ pub(crate) mod tests {
                     let v = part[0].vertices.iter().map(|v| *v + DVec3::new(1.5, 1.5, 0.0)).collect();
                     TriMesh::new(v, part[0].triangles.clone()).expect("a bush")
                 }
-                _ => {
+                2 => {
                     let v = vec![
                         DVec3::new(0.5, 0.5, 0.5), DVec3::new(2.5, 0.5, 0.7),
                         DVec3::new(1.0, 2.5, 1.9), DVec3::new(2.0, 2.0, 0.2),
                     ];
                     TriMesh::new(v, vec![[0, 1, 2], [1, 3, 2]]).expect("a sheet")
+                }
+                3 => {
+                    let part = super::super::procedural::grow(
+                        super::super::procedural::Plant::Bush, 2.5, seed);
+                    let v = part[0].vertices.iter().map(|v| *v + DVec3::new(1.5, 1.5, 0.0)).collect();
+                    let t = (part[0].triangles.iter().enumerate())
+                        .filter(|(k, _)| k % 7 != 3)
+                        .map(|(_, t)| *t)
+                        .collect();
+                    let m = TriMesh::new(v, t).expect("a bush with holes");
+                    prop_assert!(!m.is_closed());
+                    m
+                }
+                _ => {
+                    // Loose leaves: 300 triangles of 10-30 cm in a 3 m cube.
+                    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+                    let mut v = Vec::new();
+                    for _ in 0..300 {
+                        let c = DVec3::new(rng.random(), rng.random(), rng.random()) * 3.0;
+                        for _ in 0..3 {
+                            let e = DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+                            v.push(c + e * rng.random_range(0.2..0.6));
+                        }
+                    }
+                    let t = (0..300u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+                    TriMesh::new(v, t).expect("a soup")
                 }
             };
             prop_assume!(DVec3::from(d).length() > 0.1);
@@ -2552,6 +2835,12 @@ pub(crate) mod tests {
             // Stepped back along the ray, the origin is mostly outside the mesh's bounds (the
             // search of a mesh wholly ahead); as drawn, mostly inside them.
             origin -= dir.normalize() * back;
+            // Or placed `offset` before a triangle's centroid along the ray.
+            if let Some(offset) = near {
+                let k = seed as usize % m.triangle_count();
+                let [a, b, c] = m.corners(k);
+                origin = (a + b + c) / 3.0 - dir.normalize() * offset;
+            }
             let ray = Ray::new(origin, dir);
             let whole: Vec<(f64, f64)> = intervals(&m, &ray)
                 .into_iter()
@@ -2645,23 +2934,41 @@ pub(crate) mod tests {
             let box_ray = BoxRay::of(&ray);
             prop_assume!(box_ray.single.is_some());
             let node = Node::of(&children);
-            let exact = node.entries(&box_ray, false);
-            let single = node.entries(&box_ray, true);
+            let exact = node.entries(&box_ray, false, f64::NEG_INFINITY);
+            let single = node.entries(&box_ray, true, f64::NEG_INFINITY);
             // The sorting network orders the boxes met as the insertion sort does (child
             // order among equal entries: `same` repeats the first box).
-            let (met, n) = node.farthest_first(&box_ray, true);
+            let (met, n) = node.farthest_first(&box_ray, true, f64::NEG_INFINITY);
             let (want, m) = farthest_first(single);
             prop_assert_eq!(&met[..n], &want[..m]);
             if same {
                 let twins = Node::of(&[children[0], children[0], children[0]]);
-                let (met, n) = twins.farthest_first(&box_ray, true);
-                let (want, m) = farthest_first(twins.entries(&box_ray, true));
+                let (met, n) = twins.farthest_first(&box_ray, true, f64::NEG_INFINITY);
+                let (want, m) = farthest_first(twins.entries(&box_ray, true, f64::NEG_INFINITY));
                 prop_assert_eq!(&met[..n], &want[..m]);
             }
             if let Some(s) = &box_ray.single {
                 // The SSE form is the scalar one, to the bit.
-                prop_assert_eq!(single, node.entries_single_scalar(s));
+                prop_assert_eq!(single, node.entries_single_scalar(s, f64::NEG_INFINITY));
             }
+            // Cut at `from` (here `t_max`'s values): the exact test drops just the boxes the
+            // line leaves before it, the single-precision one keeps every box the exact one
+            // keeps, in SSE as in scalar form, and orders them as the reference sort does.
+            let from = t_max;
+            let exact_cut = node.entries(&box_ray, false, from);
+            let single_cut = node.entries(&box_ray, true, from);
+            let whole = (f64::NEG_INFINITY, f64::INFINITY);
+            for (j, c) in children.iter().enumerate() {
+                let leaves = box_ray.stretch_in(c.lo(), c.hi(), whole).map(|(_, t1)| t1);
+                prop_assert_eq!(exact_cut[j].is_some(), leaves.is_some_and(|t1| t1 >= from));
+                prop_assert!(exact_cut[j].is_none() || single_cut[j].is_some(), "{:?}", c);
+            }
+            if let Some(s) = &box_ray.single {
+                prop_assert_eq!(single_cut, node.entries_single_scalar(s, from));
+            }
+            let (met, n) = node.farthest_first(&box_ray, true, from);
+            let (want, m) = farthest_first(single_cut);
+            prop_assert_eq!(&met[..n], &want[..m]);
             for c in &children {
                 // The single-precision reach test passes every ray the full one passes.
                 let reach = Reach::of((c.lo(), c.hi()));
