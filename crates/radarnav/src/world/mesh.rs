@@ -1246,17 +1246,23 @@ impl TriMesh {
                 k
             })
             .collect();
-        // Groups: shells whose boxes meet (touching counts), by a sweep along x.
+        // Groups: shells whose boxes meet (touching counts), by a sweep along the axis the
+        // shells spread most over (so that a row of them is not all open at once).
+        let (lo_min, lo_max) = (boxes.iter())
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), s| {
+                (a.min(s.0), b.max(s.0))
+            });
+        let axis = (lo_max - lo_min).max_position();
         let mut groups = UnionFind::new(boxes.len());
-        let mut by_x: Vec<usize> = (0..boxes.len()).collect();
-        by_x.sort_by(|&a, &b| boxes[a].0.x.total_cmp(&boxes[b].0.x));
+        let mut order: Vec<usize> = (0..boxes.len()).collect();
+        order.sort_by(|&a, &b| boxes[a].0[axis].total_cmp(&boxes[b].0[axis]));
         let mut open: Vec<usize> = Vec::new();
-        for &k in &by_x {
+        for &k in &order {
             let (lo, hi) = boxes[k];
-            open.retain(|&j| boxes[j].1.x >= lo.x);
+            open.retain(|&j| boxes[j].1[axis] >= lo[axis]);
             for &j in &open {
                 let (a, b) = boxes[j];
-                if a.y <= hi.y && lo.y <= b.y && a.z <= hi.z && lo.z <= b.z {
+                if a.cmple(hi).all() && lo.cmple(b).all() {
                     groups.union(j, k);
                 }
             }
