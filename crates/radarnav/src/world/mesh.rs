@@ -2377,6 +2377,18 @@ pub(crate) mod tests {
         TriMesh::new(v, t).expect("a cube")
     }
 
+    /// A random ray's origin and direction, `snap` 1 putting the origin on the integer lattice
+    /// (through cube vertices, in their faces' planes), 2 the direction along x.
+    fn snapped(o: [f64; 3], d: [f64; 3], snap: usize) -> (DVec3, DVec3) {
+        let origin = DVec3::from(o);
+        let dir = DVec3::from(d);
+        match snap {
+            1 => (origin.round(), dir),
+            2 => (origin, DVec3::X * dir.x.signum()),
+            _ => (origin, dir),
+        }
+    }
+
     fn intervals(m: &TriMesh, ray: &Ray) -> Vec<(f64, f64)> {
         let mut out = Vec::new();
         m.ray_intervals(ray, &mut out);
@@ -2702,14 +2714,7 @@ pub(crate) mod tests {
             let pieces = whole.clone().into_apart();
             prop_assert_eq!(pieces.len(), 2);
             prop_assume!(DVec3::from(d).length() > 0.1);
-            let mut origin = DVec3::from(o);
-            if snap == 1 {
-                origin = origin.round();
-            }
-            let mut dir = DVec3::from(d);
-            if snap == 2 {
-                dir = DVec3::X * dir.x.signum();
-            }
+            let (origin, dir) = snapped(o, d, snap);
             let ray = Ray::new(origin, dir);
             let mut apart: Vec<(f64, f64)> = pieces.iter().flat_map(|p| intervals(p, &ray)).collect();
             apart.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -2735,14 +2740,7 @@ pub(crate) mod tests {
                 two_cubes()
             };
             prop_assume!(DVec3::from(d).length() > 0.1);
-            let mut origin = DVec3::from(o);
-            if snap == 1 {
-                origin = origin.round();
-            }
-            let mut dir = DVec3::from(d);
-            if snap == 2 {
-                dir = DVec3::X * dir.x.signum(); // along an axis, in faces' planes
-            }
+            let (origin, dir) = snapped(o, d, snap);
             let ray = Ray::new(origin, dir);
             if !Reach::of(m.aabb()).may_meet(&BoxRay::of(&ray), t_max) {
                 let iv = intervals(&m, &ray);
@@ -2830,14 +2828,7 @@ pub(crate) mod tests {
                 }
             };
             prop_assume!(DVec3::from(d).length() > 0.1);
-            let mut origin = DVec3::from(o);
-            if snap == 1 {
-                origin = origin.round();
-            }
-            let mut dir = DVec3::from(d);
-            if snap == 2 {
-                dir = DVec3::X * dir.x.signum();
-            }
+            let (mut origin, dir) = snapped(o, d, snap);
             // Stepped back along the ray, the origin is mostly outside the mesh's bounds (the
             // search of a mesh wholly ahead); as drawn, mostly inside them.
             origin -= dir.normalize() * back;
