@@ -9,7 +9,7 @@
 use glam::DVec2;
 use serde::Serialize;
 
-use super::walk::{CellIndex, CellWalk, cell_of};
+use super::walk::{CellIndex, CellWalk, cell_of, mark_crossed};
 
 /// `ln(p / (1 - p))`.
 pub fn logit(p: f64) -> f32 {
@@ -499,11 +499,24 @@ impl Grid {
         // the sensor a dense scan crosses each cell many times. Then every cell of the union
         // that is not a return of this scan gets its miss, row by row over the scan's extent.
         let seen = &mut self.seen[..];
+        // Inside the grid: `ensure` covered both ends, so the whole segments. A hit's end
+        // cell is marked too: it carries this update's stamp, so the misses below pass it by.
+        let (res, origin, width) = (self.resolution, self.origin, self.width);
+        let mut exact = true;
         for b in beams {
-            let walk = CellWalk::new(b.from, b.to, self.resolution);
-            // Inside the grid: `ensure` covered both ends, so the whole segment.
-            let n = walk.len() - usize::from(b.hit);
-            walk.for_each_index(n, self.origin, self.width, |k| seen[k] = 1);
+            exact &= mark_crossed(b.from, b.to, res, origin, width, seen);
+        }
+        if !exact {
+            // A ray passed within rounding of a cell corner (rare but for poses on the
+            // lattice): the whole scan is walked instead, so its cells are the walk's.
+            for j in lo.1 - origin.1..=hi.1 - origin.1 {
+                let row = j as usize * width;
+                seen[row + (lo.0 - origin.0) as usize..=row + (hi.0 - origin.0) as usize].fill(0);
+            }
+            for b in beams {
+                CellWalk::new(b.from, b.to, res)
+                    .for_each_index(usize::MAX, origin, width, |k| seen[k] = 1);
+            }
         }
         let (l_lo, l_hi, miss) = (self.l_min, self.l_max, self.l_miss);
         let (i0, i1) = (lo.0 - self.origin.0, hi.0 - self.origin.0 + 1);
@@ -714,6 +727,40 @@ mod tests {
             Layers::Sensed
         };
         g.mark_cells(crossed, false, layers);
+    }
+
+    /// A scan from a cell corner along the axes and diagonals passes through cell corners,
+    /// where the marking gives way and the scan is walked: still the reference update.
+    #[test]
+    fn scans_through_cell_corners_give_the_reference_update() {
+        for (from, hit) in [(DVec2::ZERO, true), (DVec2::new(0.2, -0.3), false)] {
+            let beams: Vec<Beam> = [(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-2, -2), (3, -1)]
+                .iter()
+                .map(|&(x, y)| Beam {
+                    from,
+                    to: from + DVec2::new(f64::from(x), f64::from(y)) * 0.5,
+                    hit,
+                })
+                .collect();
+            let diagonal = &beams[1];
+            let mut scratch = vec![0u8; 100 * 100];
+            assert!(!mark_crossed(
+                diagonal.from,
+                diagonal.to,
+                0.1,
+                (-50, -50),
+                100,
+                &mut scratch
+            ));
+            let (mut fast, mut slow) = (grid(), grid());
+            fast.insert(&beams, true);
+            insert_reference(&mut slow, &beams, true);
+            for i in -30..30 {
+                for j in -30..30 {
+                    assert_eq!(fast.log_odds((i, j)), slow.log_odds((i, j)), "cell {i} {j}");
+                }
+            }
+        }
     }
 
     proptest::proptest! {
