@@ -183,13 +183,13 @@ pub fn mark_crossed(
     let (mut y, mut k) = (a, index(c0) as i64 + (lo - n0) * sn);
     // The lowest `(fraction + TIE) mod 1` of all crossings: below 2·TIE at a tie.
     let mut nearest = u64::MAX;
-    let cells = seen.as_mut_ptr();
+    let (len, cells) = (seen.len(), seen.as_mut_ptr());
     if x_major {
         // Side by side in storage: one two-byte store, from the lower of the two.
         k += step.min(0);
         for _ in 0..borders {
             let here = (k + (y >> FRACTION_BITS) * sn) as usize;
-            debug_assert!(here + 1 < seen.len());
+            debug_assert!(here + 1 < len);
             // SAFETY: cells `here` and `here + 1` are in the segment's bounding box.
             unsafe { cells.add(here).cast::<[u8; 2]>().write_unaligned([1, 1]) };
             nearest = nearest.min(((y + TIE_FIXED) & (ONE - 1)) as u64);
@@ -200,7 +200,7 @@ pub fn mark_crossed(
         for _ in 0..borders {
             let here = (k + (y >> FRACTION_BITS)) as usize;
             let next = here.wrapping_add_signed(step as isize);
-            debug_assert!(here.max(next) < seen.len());
+            debug_assert!(here.max(next) < len);
             // SAFETY: cells `here` and `next` are in the segment's bounding box.
             unsafe {
                 cells.add(here).write(1);
