@@ -470,25 +470,14 @@ impl Grid {
         if beams.is_empty() {
             return;
         }
-        let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
+        let (mut lo, mut hi) = (beams[0].from, beams[0].from);
         for b in beams {
-            for c in [self.cell_of(b.from), self.cell_of(b.to)] {
-                lo = (lo.0.min(c.0), lo.1.min(c.1));
-                hi = (hi.0.max(c.0), hi.1.max(c.1));
-            }
+            (lo, hi) = (lo.min(b.from).min(b.to), hi.max(b.from).max(b.to));
         }
+        // Flooring keeps the order, so the corners' cells bound the cell of every end.
+        let (lo, hi) = (self.cell_of(lo), self.cell_of(hi));
         self.ensure(lo, hi);
         let stamp = self.begin();
-        // Hits first, so that no ray of this scan frees a cell another one ended in.
-        for b in beams.iter().filter(|b| b.hit) {
-            let Some(k) = self.index(self.cell_of(b.to)) else {
-                continue;
-            };
-            if self.mark[k] != stamp {
-                self.mark[k] = stamp;
-                self.apply(k, self.l_hit, Layers::Both);
-            }
-        }
         let layers = if misses_clear_passable {
             Layers::Both
         } else {
@@ -499,8 +488,7 @@ impl Grid {
         // the sensor a dense scan crosses each cell many times. Then every cell of the union
         // that is not a return of this scan gets its miss, row by row over the scan's extent.
         let seen = &mut self.seen[..];
-        // Inside the grid: `ensure` covered both ends, so the whole segments. A hit's end
-        // cell is marked too: it carries this update's stamp, so the misses below pass it by.
+        // Inside the grid: `ensure` covered both ends, so the whole segments.
         let (res, origin, width) = (self.resolution, self.origin, self.width);
         let mut exact = true;
         for b in beams {
@@ -518,29 +506,62 @@ impl Grid {
                     .for_each_index(usize::MAX, origin, width, |k| seen[k] = 1);
             }
         }
-        let (l_lo, l_hi, miss) = (self.l_min, self.l_max, self.l_miss);
-        let (i0, i1) = (lo.0 - self.origin.0, hi.0 - self.origin.0 + 1);
-        for j in lo.1 - self.origin.1..=hi.1 - self.origin.1 {
-            let row = j as usize * self.width;
-            let span = row + i0 as usize..row + i1 as usize;
-            let (mark, sensed, passable) = (
-                &self.mark[span.clone()],
+        // A return's cell takes its hit (once, however many rays end in it), not a miss,
+        // though its ray crossed it. The hits and the misses fall on different cells, so
+        // they may come in either order.
+        for b in beams.iter().filter(|b| b.hit) {
+            let Some(k) = self.index(self.cell_of(b.to)) else {
+                continue;
+            };
+            self.seen[k] = 0;
+            if self.mark[k] != stamp {
+                self.mark[k] = stamp;
+                self.apply(k, self.l_hit, Layers::Both);
+            }
+        }
+        let seen = &mut self.seen[..];
+        let (lo_l, hi_l, miss) = (self.l_min, self.l_max, self.l_miss);
+        let missed = |l: &mut f32| *l = (*l + miss).clamp(lo_l, hi_l);
+        let (i0, i1) = (lo.0 - origin.0, hi.0 - origin.0 + 1);
+        for j in lo.1 - origin.1..=hi.1 - origin.1 {
+            let span = j as usize * width + i0 as usize..j as usize * width + i1 as usize;
+            let (seen, sensed, passable) = (
+                &mut seen[span.clone()],
                 &mut self.sensed[span.clone()],
-                &mut self.passable[span.clone()],
+                &mut self.passable[span],
             );
-            // Eight cells at a time: most of a scan's extent was not crossed.
-            for (c, chunk) in seen[span].chunks_mut(8).enumerate() {
-                if chunk.iter().all(|&b| b == 0) {
+            // Eight cells at a time: most of a scan's extent is either not crossed at all or
+            // crossed all over (near the sensor), and a whole chunk's update vectorises.
+            let whole = seen.len() / 8 * 8;
+            let mut chunks = seen.chunks_exact_mut(8);
+            for (c, chunk) in chunks.by_ref().enumerate() {
+                let all = u64::from_ne_bytes(<[u8; 8]>::try_from(&*chunk).unwrap_or_default());
+                if all == 0 {
                     continue;
                 }
-                for (i, b) in chunk.iter_mut().enumerate() {
-                    let k = c * 8 + i;
-                    if std::mem::take(b) == 0 || mark[k] == stamp {
-                        continue;
-                    }
-                    sensed[k] = (sensed[k] + miss).clamp(l_lo, l_hi);
+                chunk.fill(0);
+                let cells = c * 8..c * 8 + 8;
+                if all == u64::from_ne_bytes([1; 8]) {
+                    sensed[cells.clone()].iter_mut().for_each(missed);
                     if layers.passable() {
-                        passable[k] = (passable[k] + miss).clamp(l_lo, l_hi);
+                        passable[cells].iter_mut().for_each(missed);
+                    }
+                    continue;
+                }
+                for (k, b) in cells.zip(all.to_ne_bytes()) {
+                    if b != 0 {
+                        missed(&mut sensed[k]);
+                        if layers.passable() {
+                            missed(&mut passable[k]);
+                        }
+                    }
+                }
+            }
+            for k in whole..seen.len() {
+                if std::mem::take(&mut seen[k]) != 0 {
+                    missed(&mut sensed[k]);
+                    if layers.passable() {
+                        missed(&mut passable[k]);
                     }
                 }
             }

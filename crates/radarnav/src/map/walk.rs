@@ -124,7 +124,17 @@ pub fn mark_crossed(
     width: usize,
     seen: &mut [u8],
 ) -> bool {
-    let (p, q) = (from / resolution, to / resolution);
+    mark_between(from / resolution, to / resolution, origin, width, seen)
+}
+
+/// [`mark_crossed`] of the segment from `p` to `q` given in cells (metres / cell size).
+pub(crate) fn mark_between(
+    p: DVec2,
+    q: DVec2,
+    origin: CellIndex,
+    width: usize,
+    seen: &mut [u8],
+) -> bool {
     let (c0, c1) = (
         (floor_i64(p.x), floor_i64(p.y)),
         (floor_i64(q.x), floor_i64(q.y)),
@@ -144,10 +154,13 @@ pub fn mark_crossed(
     let span = n0.max(n1) - lo;
     // Both ends inside the grid's columns and rows: then so is every cell of the segment's
     // bounding box, which the stores below never leave.
-    let rows = (seen.len() / width.max(1)) as i64;
-    let held = |c: CellIndex| {
-        let inside = |v: i64, o: i64, n: i64| v.checked_sub(o).is_some_and(|i| (0..n).contains(&i));
-        inside(c.0, origin.0, w) && inside(c.1, origin.1, rows)
+    // A column inside and a storage index inside put the row inside (no division).
+    let held = |c: CellIndex| match (c.0.checked_sub(origin.0), c.1.checked_sub(origin.1)) {
+        (Some(i), Some(j)) if (0..w).contains(&i) && j >= 0 => j
+            .checked_mul(w)
+            .and_then(|r| r.checked_add(i))
+            .is_some_and(|k| (k as u64) < seen.len() as u64),
+        _ => false,
     };
     assert!(held(c0) && held(c1), "the grid holds the segment");
     seen[index(c0)] = 1;
@@ -221,7 +234,7 @@ const ONE: i64 = 1 << FRACTION_BITS;
 /// Segments this long or wide, in cells, are walked: the fixed point holds 2²³ cells, and
 /// the walk's running sums drift by up to about 2·n²·10⁻¹⁶ cells over n cells (2·10⁻⁸ at
 /// this length), which must stay below [`TIE`].
-const MAX_FIXED_CELLS: u64 = 10_000;
+pub(crate) const MAX_FIXED_CELLS: u64 = 10_000;
 /// How near a cross border (in cells) a crossing makes [`mark_crossed`] give way to the
 /// walk: 2.7 times the walk's largest drift, 7 times the fixed point's rounding (2⁻⁴⁰ a
 /// step), and rare: in `compare foliage-wall`, 3.6 % of the scans have such a crossing
