@@ -285,24 +285,25 @@ impl Mapper {
         self.beams.clear();
         let from = DVec2::new(sensor_pose.x, sensor_pose.y);
         let free_reach = self.config.max_free_range.min(scan.range_max);
-        for (i, &r) in scan.ranges.iter().enumerate() {
-            let (az, el) = scan.angles(i);
-            let (s, c) = (sensor_pose.yaw + az).sin_cos();
-            let dir = DVec2::new(c, s);
+        for (el, rays) in scan.planes() {
             let (se, ce) = el.sin_cos();
-            let r = f64::from(r);
-            let (reach, hit) = if r.is_finite() && r <= self.config.max_range {
-                (r, sensor_pose.z + r * se >= self.config.ground_clearance)
-            } else if r == f64::INFINITY || r > self.config.max_range {
-                (free_reach, false)
-            } else {
-                continue; // closer than range_min, or not a number: no information
-            };
-            self.beams.push(Beam {
-                from,
-                to: from + dir * (reach * ce),
-                hit,
-            });
+            for (k, i) in rays.enumerate() {
+                let (s, c) = (sensor_pose.yaw + scan.azimuth(k)).sin_cos();
+                let dir = DVec2::new(c, s);
+                let r = f64::from(scan.ranges[i]);
+                let (reach, hit) = if r.is_finite() && r <= self.config.max_range {
+                    (r, sensor_pose.z + r * se >= self.config.ground_clearance)
+                } else if r == f64::INFINITY || r > self.config.max_range {
+                    (free_reach, false)
+                } else {
+                    continue; // closer than range_min, or not a number: no information
+                };
+                self.beams.push(Beam {
+                    from,
+                    to: from + dir * (reach * ce),
+                    hit,
+                });
+            }
         }
         self.grid
             .insert(&self.beams, misses_are_passable(scan.kind));
@@ -321,56 +322,58 @@ impl Mapper {
         let (mut first, mut through) = (Vec::new(), Vec::new());
         let mut inside: Vec<CellIndex> = Vec::new();
         let mut misses = Vec::new();
-        for i in 0..scan.len() {
-            let (az, el) = scan.angles(i);
-            let (s, c) = (sensor_pose.yaw + az).sin_cos();
+        for (el, rays) in scan.planes() {
             let (se, ce) = el.sin_cos();
-            let dir = DVec2::new(c, s) * ce;
-            let at = |r: f64| from + dir * r;
-            let echoes = scan.echoes_of(i);
-            let max_range = self.config.max_range;
-            let seen =
-                |r: f64| r <= max_range && sensor_pose.z + r * se >= self.config.ground_clearance;
-            let Some(e1) = echoes.first() else {
-                if f64::from(scan.ranges[i]) == f64::INFINITY {
-                    misses.push(Beam {
-                        from,
-                        to: at(free_reach),
-                        hit: false,
+            for (k, i) in rays.enumerate() {
+                let (s, c) = (sensor_pose.yaw + scan.azimuth(k)).sin_cos();
+                let dir = DVec2::new(c, s) * ce;
+                let at = |r: f64| from + dir * r;
+                let echoes = scan.echoes_of(i);
+                let max_range = self.config.max_range;
+                let seen = |r: f64| {
+                    r <= max_range && sensor_pose.z + r * se >= self.config.ground_clearance
+                };
+                let Some(e1) = echoes.first() else {
+                    if f64::from(scan.ranges[i]) == f64::INFINITY {
+                        misses.push(Beam {
+                            from,
+                            to: at(free_reach),
+                            hit: false,
+                        });
+                    }
+                    continue;
+                };
+                if e1.range > max_range {
+                    continue;
+                }
+                first.push(Beam {
+                    from,
+                    to: at(e1.range),
+                    hit: seen(e1.range),
+                });
+                let Some(last) = echoes.iter().rev().find(|e| e.range <= max_range) else {
+                    continue;
+                };
+                let end = last.range + last.depth;
+                let start = e1.range + res;
+                if end > start {
+                    through.push(Beam {
+                        from: at(start),
+                        to: at(end.min(max_range)),
+                        hit: last.depth == 0.0 && echoes.len() > 1 && seen(last.range),
                     });
                 }
-                continue;
-            };
-            if e1.range > max_range {
-                continue;
-            }
-            first.push(Beam {
-                from,
-                to: at(e1.range),
-                hit: seen(e1.range),
-            });
-            let Some(last) = echoes.iter().rev().find(|e| e.range <= max_range) else {
-                continue;
-            };
-            let end = last.range + last.depth;
-            let start = e1.range + res;
-            if end > start {
-                through.push(Beam {
-                    from: at(start),
-                    to: at(end.min(max_range)),
-                    hit: last.depth == 0.0 && echoes.len() > 1 && seen(last.range),
-                });
-            }
-            for e in echoes
-                .iter()
-                .filter(|e| e.depth > 0.0 && e.range <= max_range)
-            {
-                let walk = super::walk::CellWalk::new(
-                    at(e.range),
-                    at((e.range + e.depth).min(max_range)),
-                    res,
-                );
-                inside.extend(walk);
+                for e in echoes
+                    .iter()
+                    .filter(|e| e.depth > 0.0 && e.range <= max_range)
+                {
+                    let walk = super::walk::CellWalk::new(
+                        at(e.range),
+                        at((e.range + e.depth).min(max_range)),
+                        res,
+                    );
+                    inside.extend(walk);
+                }
             }
         }
         self.grid.insert(&first, true);

@@ -236,11 +236,13 @@ impl Truth {
         let mut free_found = 0usize;
         let mut free_seen = 0usize;
         let mut known = 0usize;
-        for (k, &t) in self.cells.iter().enumerate() {
-            let c = (
-                self.origin.0 + (k % self.width) as i64,
-                self.origin.1 + (k / self.width) as i64,
-            );
+        // Row by row: no division per cell to find its column and row.
+        let rows = self.cells.chunks(self.width.max(1));
+        let cells = rows.enumerate().flat_map(|(j, row)| {
+            let y = self.origin.1 + j as i64;
+            (row.iter().enumerate()).map(move |(i, &t)| ((self.origin.0 + i as i64, y), t))
+        });
+        for (c, t) in cells {
             let class = grid.class(c);
             let truly_free = t != TruthCell::Obstacle;
             known += usize::from(class != CellClass::Unknown);

@@ -143,10 +143,20 @@ impl Scan {
     /// (azimuth relative to the sensor, elevation) of ray `i`, radians.
     pub fn angles(&self, i: usize) -> (f64, f64) {
         let (plane, az) = (i / self.azimuths, i % self.azimuths);
-        (
-            self.angle_min + az as f64 * self.angle_increment,
-            self.elevations[plane],
-        )
+        (self.azimuth(az), self.elevations[plane])
+    }
+
+    /// Azimuth of the `k`-th ray of each plane in the sensor frame, rad.
+    pub fn azimuth(&self, k: usize) -> f64 {
+        self.angle_min + k as f64 * self.angle_increment
+    }
+
+    /// Each scan plane's elevation, rad, with the indices of its rays in `ranges`: the
+    /// rays plane by plane without a division per ray, as [`Scan::angles`] numbers them.
+    pub fn planes(&self) -> impl Iterator<Item = (f64, std::ops::Range<usize>)> + '_ {
+        let (n, len) = (self.azimuths, self.len());
+        (self.elevations.iter().enumerate())
+            .map(move |(p, &el)| (el, (p * n).min(len)..((p + 1) * n).min(len)))
     }
 
     /// Ray `i` as cast: from its (possibly side-offset) origin, in the world frame.
