@@ -453,19 +453,23 @@ impl Grid {
     /// a ray passes through gets one miss in `sensed`, and in `passable` too when
     /// `misses_clear_passable` (the sensor stops at the first thing in its way).
     pub fn insert(&mut self, beams: &[Beam], misses_clear_passable: bool) {
-        // Scans inside the limit (all of them in a closed world) are used as they are.
+        // Scans inside the limit (all of them in a closed world) are used as they are; a ray
+        // with an end not a number (a pose gone wrong upstream) says nothing and is dropped.
+        let usable = |p: DVec2| match self.limit {
+            Some((lo, hi)) => p.cmpge(lo).all() && p.cmple(hi).all(),
+            None => p.is_finite(),
+        };
         let clipped: Vec<Beam>;
-        let beams = match self.limit {
-            Some((lo, hi))
-                if !beams.iter().all(|b| {
-                    let inside = |p: DVec2| p.cmpge(lo).all() && p.cmple(hi).all();
-                    inside(b.from) && inside(b.to)
-                }) =>
-            {
-                clipped = beams.iter().filter_map(|b| self.clip(b)).collect();
-                &clipped[..]
-            }
-            _ => beams,
+        let beams = if beams.iter().all(|b| usable(b.from) && usable(b.to)) {
+            beams
+        } else {
+            let finite = |b: &&Beam| b.from.is_finite() && b.to.is_finite();
+            clipped = beams
+                .iter()
+                .filter(finite)
+                .filter_map(|b| self.clip(b))
+                .collect();
+            &clipped[..]
         };
         if beams.is_empty() {
             return;
@@ -814,6 +818,51 @@ mod tests {
             for c in cells {
                 proptest::prop_assert_eq!(fast.log_odds(c), slow.log_odds(c), "cell {:?}", c);
             }
+        }
+    }
+
+    /// Rays with an end not a number or infinite are dropped; the rest update as alone, with
+    /// or without a limit.
+    #[test]
+    fn rays_with_non_finite_ends_are_dropped() {
+        let good = [
+            Beam {
+                from: DVec2::new(0.12, 0.31),
+                to: DVec2::new(1.7, 0.9),
+                hit: true,
+            },
+            Beam {
+                from: DVec2::new(0.12, 0.31),
+                to: DVec2::new(-0.8, 1.4),
+                hit: false,
+            },
+        ];
+        let bad = [
+            Beam {
+                from: DVec2::new(0.12, 0.31),
+                to: DVec2::new(f64::NAN, 1.0),
+                hit: true,
+            },
+            Beam {
+                from: DVec2::new(f64::INFINITY, 0.0),
+                to: DVec2::new(1.0, 1.0),
+                hit: false,
+            },
+        ];
+        let all: Vec<Beam> = [bad[0], good[0], bad[1], good[1]].to_vec();
+        for limit in [None, Some((DVec2::new(-5.0, -5.0), DVec2::new(5.0, 5.0)))] {
+            let (mut with, mut without) = (grid(), grid());
+            with.limit = limit;
+            without.limit = limit;
+            with.insert(&all, true);
+            without.insert(&good, true);
+            assert_eq!(
+                (with.origin, with.width, with.height),
+                (without.origin, without.width, without.height)
+            );
+            assert_eq!(with.sensed, without.sensed);
+            assert_eq!(with.passable, without.passable);
+            assert!(with.sensed.iter().any(|&l| l != 0.0));
         }
     }
 
