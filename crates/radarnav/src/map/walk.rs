@@ -124,17 +124,7 @@ pub fn mark_crossed(
     width: usize,
     seen: &mut [u8],
 ) -> bool {
-    mark_between(from / resolution, to / resolution, origin, width, seen)
-}
-
-/// [`mark_crossed`] of the segment from `p` to `q` given in cells (metres / cell size).
-pub(crate) fn mark_between(
-    p: DVec2,
-    q: DVec2,
-    origin: CellIndex,
-    width: usize,
-    seen: &mut [u8],
-) -> bool {
+    let (p, q) = (from / resolution, to / resolution);
     let (c0, c1) = (
         (floor_i64(p.x), floor_i64(p.y)),
         (floor_i64(q.x), floor_i64(q.y)),
@@ -234,7 +224,7 @@ const ONE: i64 = 1 << FRACTION_BITS;
 /// Segments this long or wide, in cells, are walked: the fixed point holds 2²³ cells, and
 /// the walk's running sums drift by up to about 2·n²·10⁻¹⁶ cells over n cells (2·10⁻⁸ at
 /// this length), which must stay below [`TIE`].
-pub(crate) const MAX_FIXED_CELLS: u64 = 10_000;
+const MAX_FIXED_CELLS: u64 = 10_000;
 /// How near a cross border (in cells) a crossing makes [`mark_crossed`] give way to the
 /// walk: 2.7 times the walk's largest drift, 7 times the fixed point's rounding (2⁻⁴⁰ a
 /// step), and rare: in `compare foliage-wall`, 3.6 % of the scans have such a crossing
