@@ -309,6 +309,23 @@ fn a_turn_stopped_in_a_slot_barely_wider_than_the_turning_circle_is_not_backed_o
     assert_clean(&runs);
 }
 
+#[test]
+fn a_hit_with_the_goal_off_the_far_side_takes_up_the_obstacle_in_the_goal_s_way() {
+    // Leaving a crate at an m-line crossing, Bug2 turned on the spot toward the goal and its
+    // bumper toward the goal tripped on the next crate 30 degrees before it faced the goal,
+    // with the goal on the side away from the wall: the follower's first arc toward the wall
+    // side took up the crate just left, not the one in the way. Back at its hit point without
+    // a closer crossing at every standoff: `no_path`. It now faces the goal's sector first,
+    // follows the crate in the way and reaches the goal at the first standoff.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map = TrialMap::new(Scenario::builtin("nav/crates-turn").expect("built-in")).expect("bug");
+    let run = laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, 1);
+    assert_clean(std::slice::from_ref(&run));
+    let why = failures(std::slice::from_ref(&run)).join("\n");
+    assert_eq!(run.attempts, 1, "a standoff retry was needed\n{why}");
+}
+
 /// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
 fn laser_run(
     map: &TrialMap,

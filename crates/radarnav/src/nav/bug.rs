@@ -45,6 +45,11 @@
 //! same way (see `Boundary::closes_loop`).
 //!
 //! Made to hold on maps nobody tuned it to (DESIGN §6):
+//! * a hit takes up the obstacle in the goal's way: turning toward the goal on the spot, the
+//!   bumper toward it may trip before the robot faces it; with the goal's sector past the
+//!   front on the side away from the wall, the robot first turns on until the goal lies in
+//!   the front sector (rule 1 then turns that obstacle onto the wall side; the follower's arc
+//!   toward the wall side would take up whatever lies there);
 //! * leaving needs the body's corridor toward the goal free, not only the goal's sector;
 //! * Bug1: a hit before getting a follow radius nearer the goal than the leave point is the
 //!   same obstacle (a notch or a concave side), a `no_path` condition;
@@ -848,6 +853,17 @@ impl BugController {
         match &mut self.mode {
             Mode::ToGoal => {
                 if hit && heading.abs() <= TURN_IN_PLACE {
+                    // The boundary followed is the obstacle's in the goal's direction. Turning
+                    // toward the goal on the spot trips the bumper toward it up to
+                    // `TURN_IN_PLACE` before facing it; with the goal's sector on the side away
+                    // from the wall, the follower would turn toward the wall side (away from
+                    // that obstacle) and take up whatever lies there. Face the goal's sector
+                    // first: rule 1 then turns the obstacle in it onto the wall side.
+                    let s = self.mission.follow.sign();
+                    if !bumped && s * heading < -std::f64::consts::PI / b.sectors() as f64 {
+                        let omega = heading.signum() * TURN_RATE;
+                        return Decision::Drive(DriveCommand::twist(0.0, omega));
+                    }
                     // Bug1: hitting again before getting a standoff nearer the goal than the
                     // leave point is the same obstacle in the way (a notch, a concave side)
                     // when the loop left went round the goal; else it is a neighbour, whose
@@ -1242,6 +1258,94 @@ mod tests {
             (DVec2::new(8.0, 0.9), 0.0),
         ];
         assert_eq!(first_loop(&mut boundary(hit), &path), None);
+    }
+
+    /// One decision of `c` at `time` and `pose` (true pose = odometry) on a full-circle radar
+    /// scan taken then of a wall across the world x axis at `x = 1.2`, from far to the right
+    /// up to `y = 0.05`.
+    fn decide_before_wall_end(
+        c: &mut BugController,
+        time: f64,
+        pose: &crate::pose::Pose,
+    ) -> Decision {
+        use crate::nav::bumper::tests::ring_scan;
+        use crate::setup::MountedSensor;
+        let (yaw, dx) = (pose.yaw, 1.2 - pose.x);
+        let mut scan = ring_scan(360, |a: f64| {
+            let (s, c) = (a + yaw).sin_cos();
+            let r = dx / c;
+            if c > 1e-9 && pose.y + r * s <= 0.05 {
+                r as f32
+            } else {
+                f32::INFINITY
+            }
+        });
+        scan.pose = *pose;
+        scan.stamp = time;
+        let sensors = [MountedSensor {
+            name: "radar".into(),
+            config: crate::sensor::preset("radar_thesis").expect("preset"),
+            mount: crate::pose::Pose::default(),
+        }];
+        let input = ControlInput {
+            time,
+            odometry: pose,
+            truth: pose,
+            bumped: false,
+            scans: &[Some(scan)],
+            scan_odometry: &[Some(*pose)],
+            slam: None,
+            scan_slam: &[],
+            sensors: &sensors,
+            vehicle: crate::vehicle::vehicle("p3at").expect("p3at"),
+        };
+        c.decide(&input, false)
+    }
+
+    /// The twist of a decision to drive.
+    fn twist_of(d: Decision) -> crate::vehicle::Twist {
+        match d {
+            Decision::Drive(DriveCommand::Twist(t)) => t,
+            d => panic!("a twist expected: {d:?}"),
+        }
+    }
+
+    #[test]
+    fn a_hit_with_the_goal_past_the_front_on_the_far_side_first_faces_the_goal() {
+        use super::super::wall_follow::FollowRule;
+        use crate::pose::Pose;
+        // The goal straight along +x beyond the end of a wall 1.2 m off. Keeping the boundary
+        // on its left, the robot faces 28 degrees left of the goal: the bumper toward the
+        // goal (the right diagonal, past the front sector's 22.5 degrees) has tripped, the
+        // front and the left are clear. Following from here would arc left, away from the
+        // wall in the goal's way.
+        let mission = BugMission {
+            pose: PoseSource::Truth,
+            ..BugMission::new(BugAlgorithm::Bug2, DVec2::new(10.0, 0.0))
+        };
+        let mut c = BugController::new(mission.clone(), 10.0);
+        let turned = Pose::new(0.0, 0.0, 0.0, 28f64.to_radians());
+        // Not a hit yet: it turns right on the spot, toward the goal.
+        let t = twist_of(decide_before_wall_end(&mut c, 0.0, &turned));
+        assert!(t.v == 0.0 && t.omega < 0.0, "{t:?}");
+        assert!(c.bug_report().hit_points.is_empty());
+        // With the goal in the front sector the wall trips the front: a hit, and rule 1 turns
+        // the wall onto the left, the wall side.
+        let facing = Pose::new(0.0, 0.0, 0.0, 20f64.to_radians());
+        let t = twist_of(decide_before_wall_end(&mut c, 0.1, &facing));
+        assert!(t.v == 0.0 && t.omega < 0.0, "{t:?}");
+        assert_eq!(c.bug_report().hit_points.len(), 1);
+        assert_eq!(c.follower.rule(), FollowRule::TurnAway);
+        // Keeping the boundary on the right, the goal lies on the wall side: a hit at once.
+        let mut c = BugController::new(
+            BugMission {
+                follow: Side::Right,
+                ..mission
+            },
+            10.0,
+        );
+        decide_before_wall_end(&mut c, 0.0, &turned);
+        assert_eq!(c.bug_report().hit_points.len(), 1);
     }
 
     #[test]

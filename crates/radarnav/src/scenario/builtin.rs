@@ -213,6 +213,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         "nav/slot-narrowing",
         include_str!("../../../../scenarios/nav/slot-narrowing.toml"),
     ),
+    (
+        "nav/crates-turn",
+        include_str!("../../../../scenarios/nav/crates-turn.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name` (a trial map is `nav/<name>`).
