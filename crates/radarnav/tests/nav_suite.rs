@@ -326,6 +326,22 @@ fn a_hit_with_the_goal_off_the_far_side_takes_up_the_obstacle_in_the_goal_s_way(
     assert_eq!(run.attempts, 1, "a standoff retry was needed\n{why}");
 }
 
+#[test]
+fn a_way_that_ends_beyond_an_opening_off_the_followed_side_is_left_through_the_opening() {
+    // Driving the way between a crate and the room wall, centred, Bug2 passed the 0.9 m gap
+    // where the followed crate's boundary turns off, met the pocket at the way's end, turned
+    // about and came back out along the other side: `no_path` after 99 m, the standoff
+    // retries no better. It now goes back through the gap at the pocket and reaches the goal
+    // at the first standoff.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map = TrialMap::new(Scenario::builtin("nav/crates-aside").expect("built-in")).expect("bug");
+    let run = laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, 1);
+    assert_clean(std::slice::from_ref(&run));
+    let why = failures(std::slice::from_ref(&run)).join("\n");
+    assert_eq!(run.attempts, 1, "a standoff retry was needed\n{why}");
+}
+
 /// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
 fn laser_run(
     map: &TrialMap,

@@ -25,7 +25,12 @@
 //! comes back out the same way (which is how the boundary goes on), and hands back to the
 //! follower where the way widens, or where it ends ahead but turns off to one side (an L
 //! between a hedge's end and a room wall: the follower takes the corner, keeping its side).
-//! A dead end with no room to turn about is backed out of.
+//! A dead end with no room to turn about is backed out of. Where the followed side opens on
+//! the way through a gap narrower than the way (a crate's end and its neighbour's corner),
+//! the followed boundary goes on through that opening, while the centred drive passes it
+//! by: the opening is remembered ([`Passage::note_aside`]), and a dead end met beyond it is
+//! left through it (a new passage) rather than by turning about, which would hand the
+//! follower the other side's boundary back out of the way.
 //!
 //! A gap can look wider from afar than the way through it is (returns on box corners, range
 //! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
@@ -503,6 +508,9 @@ pub struct Passage {
     backing: bool,
     /// Given up, the robot has turned to face through the gap and is backing out.
     backing_out: bool,
+    /// The last gap seen off the followed side of the way (world frame), see
+    /// [`Passage::note_aside`].
+    aside: Option<Gap>,
 }
 
 /// What a passage step asks for.
@@ -514,6 +522,8 @@ pub enum PassStep {
     Done,
     /// The body's clearance does not allow the move: give the gap up.
     Blocked,
+    /// A dead end beyond a gap seen off the followed side on the way in: pass that gap.
+    Aside(Gap),
 }
 
 impl Passage {
@@ -535,6 +545,7 @@ impl Passage {
             blocks: 0,
             backing: false,
             backing_out: false,
+            aside: None,
         }
     }
 
@@ -562,6 +573,27 @@ impl Passage {
     /// The world-frame gap being passed.
     pub fn gap(&self) -> &Gap {
         &self.gap
+    }
+
+    /// Notes `seen` (world frame) when it is a gap off the followed side of the way being
+    /// driven through, seen from the believed `pose`: where the followed side opens, its
+    /// boundary goes on through the opening. Driving on centred between the sides passes
+    /// such an opening by; should the way end beyond it, the robot goes back to the opening
+    /// and through it rather than turning about and out the way it came (which would swap
+    /// the followed boundary for the other side's). Noted only while driving between the
+    /// sides, for a gap other than the one entered, narrower than it (a wider one is where
+    /// the way itself turns, an L, taken at its end) and facing across the way (its normal
+    /// more than 45° off the heading).
+    pub fn note_aside(&mut self, seen: &Gap, pose: &Pose) {
+        let heading = DVec2::from_angle(pose.yaw);
+        if self.phase == Phase::Through
+            && self.about <= 0.0
+            && (seen.mid - self.gap.mid).length() > 1.0
+            && seen.width < self.gap.width
+            && seen.normal.dot(heading).abs() < std::f64::consts::FRAC_1_SQRT_2
+        {
+            self.aside = Some(*seen);
+        }
     }
 
     /// Takes a newer sighting of the same gap (world frame), keeping its direction, until the
@@ -741,6 +773,10 @@ impl Passage {
                 return PassStep::Drive(0.0, 0.0);
             }
             if self.about <= 0.0 {
+                // The followed side opened on the way here: its boundary goes on there.
+                if let Some(aside) = self.aside.take() {
+                    return PassStep::Aside(aside);
+                }
                 self.about = std::f64::consts::PI;
             }
             self.about -= PASS_TURN * dt;
@@ -1047,18 +1083,24 @@ mod tests {
                 end => return (end, pose, steps as f64 * dt),
             }
             watch(&pass, &pose);
-            let r = DVec2::from_angle(-pose.yaw);
-            for (a, b) in walls {
-                for i in 0..=((*b - *a).length() * 100.0) as usize {
-                    let w = r.rotate(*a + (*b - *a).normalize() * (i as f64 / 100.0) - pose.xy());
-                    assert!(
-                        w.x.abs() > length / 2.0 || w.y.abs() > width / 2.0,
-                        "wall point {w} inside the body at {pose:?}"
-                    );
-                }
-            }
+            assert_untouched(walls, &pose, length, width);
             steps += 1;
             assert!(steps < 4000, "no progress: {pose:?}");
+        }
+    }
+
+    /// Checks that no point of `walls` (world frame, every centimetre) lies inside the body
+    /// of `length` × `width` m at `pose`.
+    fn assert_untouched(walls: &[(DVec2, DVec2)], pose: &Pose, length: f64, width: f64) {
+        let r = DVec2::from_angle(-pose.yaw);
+        for (a, b) in walls {
+            for i in 0..=((*b - *a).length() * 100.0) as usize {
+                let w = r.rotate(*a + (*b - *a).normalize() * (i as f64 / 100.0) - pose.xy());
+                assert!(
+                    w.x.abs() > length / 2.0 || w.y.abs() > width / 2.0,
+                    "wall point {w} inside the body at {pose:?}"
+                );
+            }
         }
     }
 
@@ -1158,6 +1200,65 @@ mod tests {
                 "arm {arm}: {pose:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_dead_end_beyond_an_opening_off_the_followed_side_goes_back_through_the_opening() {
+        // The doorway (1.2 m) is the mouth of a way as wide going down 5 m to a dead end. Its
+        // right-hand side (the followed one: x = 1) opens 2 m in onto a room, through a gap
+        // of 0.9 m (narrower than the way; r4300-crates: a crate's corner and its
+        // neighbour's). Centred between the sides, the robot passes the opening by; at the
+        // dead end it goes back through the opening, where the followed boundary goes on,
+        // instead of turning about and out the mouth.
+        let mut walls = doorway(1.2);
+        walls.extend([
+            (DVec2::new(1.0, -1.0), DVec2::new(1.0, -3.0)),
+            (DVec2::new(1.0, -3.9), DVec2::new(1.0, -6.0)),
+            (DVec2::new(1.0, -6.0), DVec2::new(2.2, -6.0)),
+            (DVec2::new(2.2, -6.0), DVec2::new(2.2, -1.0)),
+            (DVec2::new(-5.0, -1.0), DVec2::new(-5.0, -9.0)),
+            (DVec2::new(-5.0, -9.0), DVec2::new(1.0, -9.0)),
+        ]);
+        let (length, width) = (0.508, 0.497);
+        let mut pose = Pose::default();
+        let pts = scan(&local(&walls, &pose));
+        let mut pass = Passage::new(gap(&pts, -1.0, 0.71..3.0).expect("mouth"), 3.0, 0.4);
+        let (mut asides, mut deepest) = (0, 0.0f64);
+        let dt = 0.05;
+        for _ in 0..6000 {
+            let pts = scan(&local(&walls, &pose));
+            if let Some(g) = gap(&pts, -1.0, 0.71..3.0) {
+                pass.note_aside(&g.in_frame(&pose), &pose);
+            }
+            let step = match pass.step(&pose, &pts, length, width, dt) {
+                PassStep::Aside(g) => {
+                    asides += 1;
+                    assert!((g.width - 0.9).abs() < 0.05, "{g:?}");
+                    pass = Passage::new(g, 3.0, 0.4);
+                    pass.step(&pose, &pts, length, width, dt)
+                }
+                step => step,
+            };
+            match step {
+                PassStep::Drive(v, w) => {
+                    pose.yaw += w * dt;
+                    pose.x += v * dt * pose.yaw.cos();
+                    pose.y += v * dt * pose.yaw.sin();
+                }
+                end => {
+                    assert_eq!(end, PassStep::Done, "{pose:?}");
+                    break;
+                }
+            }
+            deepest = deepest.min(pose.y);
+            assert_untouched(&walls, &pose, length, width);
+        }
+        assert_eq!(asides, 1);
+        assert!(
+            deepest < -5.0,
+            "went past the opening to the end: {deepest}"
+        );
+        assert!(pose.x < 0.7 && (-4.2..=-2.7).contains(&pose.y), "{pose:?}");
     }
 
     /// Where the robot following the wall of [`doorway`] stands when it gives a gap up: backed

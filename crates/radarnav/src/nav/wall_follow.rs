@@ -226,8 +226,17 @@ impl WallFollower {
                 turn_diameter..2.0 * radius,
             )
             .map(|gap| gap.in_frame(pose));
+            // A gap at a place remembered as a dead end is not passed again.
+            let dead_end = seen.is_some_and(|s| {
+                g.dead_ends
+                    .iter()
+                    .any(|d| (s.mid - *d).length() <= DEAD_END_RADIUS)
+            });
             match (&mut g.passage, seen) {
                 (Some(passage), Some(seen)) => {
+                    if !dead_end {
+                        passage.note_aside(&seen, pose);
+                    }
                     passage.refine(&seen);
                 }
                 (None, Some(seen)) => {
@@ -235,10 +244,6 @@ impl WallFollower {
                     let fresh = g.done.is_none_or(|(mid, at)| {
                         (seen.mid - mid).length() > 1.0 || g.travelled - at > TAU * radius + 2.0
                     });
-                    let dead_end = g
-                        .dead_ends
-                        .iter()
-                        .any(|d| (seen.mid - *d).length() <= DEAD_END_RADIUS);
                     if fresh && !dead_end {
                         g.passage = Some(Passage::new(seen, 2.0 * radius, self.speed));
                     }
@@ -247,9 +252,15 @@ impl WallFollower {
             }
         }
         let passage = g.passage.as_mut()?;
-        match passage.step(pose, b.clearance(), g.length, g.width, dt) {
+        let mut step = passage.step(pose, b.clearance(), g.length, g.width, dt);
+        if let PassStep::Aside(aside) = step {
+            g.done = Some((passage.gap().mid, g.travelled));
+            *passage = Passage::new(aside, 2.0 * radius, self.speed);
+            step = passage.step(pose, b.clearance(), g.length, g.width, dt);
+        }
+        match step {
             PassStep::Drive(v, omega) => Some(DriveCommand::twist(v, omega)),
-            PassStep::Done | PassStep::Blocked => {
+            PassStep::Done | PassStep::Blocked | PassStep::Aside(_) => {
                 g.done = Some((passage.gap().mid, g.travelled));
                 g.passage = None;
                 None

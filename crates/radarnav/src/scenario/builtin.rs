@@ -217,6 +217,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         "nav/crates-turn",
         include_str!("../../../../scenarios/nav/crates-turn.toml"),
     ),
+    (
+        "nav/crates-aside",
+        include_str!("../../../../scenarios/nav/crates-aside.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name` (a trial map is `nav/<name>`).
