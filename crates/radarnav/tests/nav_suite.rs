@@ -321,9 +321,7 @@ fn a_hit_with_the_goal_off_the_far_side_takes_up_the_obstacle_in_the_goal_s_way(
     use radarnav::nav::BugAlgorithm;
     let map = TrialMap::new(Scenario::builtin("nav/crates-turn").expect("built-in")).expect("bug");
     let run = laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, 1);
-    assert_clean(std::slice::from_ref(&run));
-    let why = failures(std::slice::from_ref(&run)).join("\n");
-    assert_eq!(run.attempts, 1, "a standoff retry was needed\n{why}");
+    assert_first_attempt(&run);
 }
 
 #[test]
@@ -337,9 +335,21 @@ fn a_way_that_ends_beyond_an_opening_off_the_followed_side_is_left_through_the_o
     use radarnav::nav::BugAlgorithm;
     let map = TrialMap::new(Scenario::builtin("nav/crates-aside").expect("built-in")).expect("bug");
     let run = laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, 1);
-    assert_clean(std::slice::from_ref(&run));
-    let why = failures(std::slice::from_ref(&run)).join("\n");
-    assert_eq!(run.attempts, 1, "a standoff retry was needed\n{why}");
+    assert_first_attempt(&run);
+}
+
+#[test]
+fn bug1_on_odometry_that_closed_its_loop_round_a_neighbour_leaves_from_that_loop() {
+    // In the bush band, Bug1's laser follower on odometry took up a bush beside its way and
+    // closed a 12 m loop round it, on its own path away from the hit point. Its closest point
+    // lay on the way onto that loop, which the loop does not pass again: it ended `no_path`
+    // there, and the three standoff retries with it (254 m). The closest point of a loop is
+    // now taken on the loop itself, and the goal is reached at the first standoff.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
+    let run = laser_run(&map, BugAlgorithm::Bug1, PoseSource::Odometry, 2);
+    assert_first_attempt(&run);
 }
 
 /// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
@@ -384,6 +394,13 @@ fn assert_retraced_clean(
         let why = failures(std::slice::from_ref(r)).join("\n");
         assert!(r.dead_ends >= 1, "no dead end retraced\n{why}");
     }
+}
+
+/// `run` passed without a bump at the first standoff, with no retry.
+fn assert_first_attempt(run: &radarnav::trials::TrialResult) {
+    assert_clean(std::slice::from_ref(run));
+    let why = failures(std::slice::from_ref(run)).join("\n");
+    assert_eq!(run.attempts, 1, "a standoff retry was needed\n{why}");
 }
 
 /// Every run in `runs` passed without a bump (the failure lines otherwise).

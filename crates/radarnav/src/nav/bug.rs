@@ -53,6 +53,10 @@
 //! * leaving needs the body's corridor toward the goal free, not only the goal's sector;
 //! * Bug1: a hit before getting a follow radius nearer the goal than the leave point is the
 //!   same obstacle (a notch or a concave side), a `no_path` condition;
+//! * Bug1: a loop that closes on its own path rather than at the hit point (round a
+//!   neighbour the follower took up on the way) need not pass the way that led onto it
+//!   again: a closest point met on that way, which the loop does not come within the loop
+//!   tolerance of, is taken on the loop instead;
 //! * a goal inside the standoff of an obstacle beyond it is approached slowly once the body's
 //!   corridor to it is free (the bumpers would trip first);
 //! * every `no_path` condition is first met with a **standoff retry**: the bumpers' safety
@@ -396,6 +400,25 @@ impl Boundary {
             .min_by(|a, b| (a.1.0 - p).length().total_cmp(&(b.1.0 - p).length()))
             .map_or(0, |(k, _)| k);
         on[from..].to_vec()
+    }
+
+    /// Bug1, as the loop closes: `closest` if the loop meets it again (it was followed on the
+    /// loop, or the loop passes within `tol` of it), else the loop's followed point nearest
+    /// `goal` (the loop closed on its own path, away from where `closest` was met).
+    fn closest_on_loop(
+        &self,
+        closest: (DVec2, f64, f64),
+        goal: DVec2,
+        tol: f64,
+    ) -> (DVec2, f64, f64) {
+        let on_loop = || (self.trail.iter()).filter(|s| s.2 >= self.loop_from);
+        if closest.2 >= self.loop_from || on_loop().any(|s| (s.0 - closest.0).length() <= tol) {
+            return closest;
+        }
+        on_loop()
+            .map(|s| (s.0, (goal - s.0).length(), s.2))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or(closest)
     }
 
     /// Takes back the last part of the followed path, which went `length` metres into a dead
@@ -923,15 +946,33 @@ impl BugController {
                         }
                         if looped {
                             bd.circled = true;
+                            // A loop closed on its own path rather than at the hit point
+                            // (the follower took up a neighbour's boundary and went round
+                            // it) may not pass the way that led onto it again: a closest
+                            // point met there, off the loop, is taken on the loop instead,
+                            // which the robot stands at the start of.
+                            let on_loop = bd.closest_on_loop(bd.closest, goal, tol);
+                            let tail = on_loop != bd.closest;
+                            bd.closest = on_loop;
                             // Going on reaches the closest point after `closest.2`, going
-                            // back after the rest of the loop: turn about when that is shorter.
-                            let ahead = bd.closest.2;
+                            // back after the rest of the loop: turn about when that is
+                            // shorter. (A point met on the loop is counted from the hit
+                            // point even when the loop closed a little past it, off the
+                            // settled path: that overstates the way on by the stretch
+                            // before the loop, and the slack it gives the odometer and the
+                            // half-loop limit kept runs that counting from the loop's
+                            // start lost, measured on the trial and random maps.)
+                            let ahead = bd.closest.2 - if tail { bd.loop_from } else { 0.0 };
                             let behind = bd.travelled - bd.closest.2;
                             bd.replay_back = behind < ahead;
                             bd.replay_pending = true;
                             bd.leave_at = bd.travelled + ahead.min(behind);
                             bd.loop_len = bd.travelled;
-                            let ring: Vec<DVec2> = bd.trail.iter().map(|s| s.0).collect();
+                            let from = if tail { bd.loop_from } else { 0.0 };
+                            let ring: Vec<DVec2> = (bd.trail.iter())
+                                .filter(|s| s.2 >= from)
+                                .map(|s| s.0)
+                                .collect();
                             bd.goal_beyond = beyond_boundary(&ring, goal, self.follower.side());
                             if bd.nearer_than.is_some_and(|d| bd.closest.1 > d - tol / 2.0) {
                                 return self.no_path(
@@ -1346,6 +1387,41 @@ mod tests {
         );
         decide_before_wall_end(&mut c, 0.0, &turned);
         assert_eq!(c.bug_report().hit_points.len(), 1);
+    }
+
+    #[test]
+    fn a_loop_closed_round_a_neighbour_has_its_closest_point_on_that_loop() {
+        // From the hit point east toward the goal's side, then north and round a 3 m square
+        // clockwise (a neighbour taken up) and on: the loop closes on its own path, not at
+        // the hit point, and leaves the way onto it (nearest the goal) behind.
+        let (hit, goal) = (DVec2::ZERO, DVec2::new(6.0, -1.0));
+        let path = [
+            (hit, 0.0),
+            (DVec2::new(4.0, 0.0), FRAC_PI_2),
+            (DVec2::new(4.0, 3.0), PI),
+            (DVec2::new(1.0, 3.0), FRAC_PI_2),
+            (DVec2::new(1.0, 6.0), 0.0),
+            (DVec2::new(4.0, 6.0), -FRAC_PI_2),
+            (DVec2::new(4.0, 3.0), PI),
+            (DVec2::new(2.0, 3.0), PI),
+        ];
+        let mut bd = boundary(hit);
+        let at = first_loop(&mut bd, &path).expect("loop");
+        assert!((at - DVec2::new(4.0, 3.0)).length() < 0.8, "{at}");
+        assert!(bd.loop_from > 6.6, "closed at {}", bd.loop_from);
+        let tail = DVec2::new(4.0, 0.0);
+        let on_tail = (tail, (goal - tail).length(), 4.0);
+        let (c, d, along) = bd.closest_on_loop(on_tail, goal, 0.75);
+        assert!(along >= bd.loop_from, "{along} before {}", bd.loop_from);
+        assert!((c - DVec2::new(4.0, 3.0)).length() < 0.25, "{c}");
+        assert!((d - (goal - c).length()).abs() < 1e-12);
+        // A closest point on the loop stays.
+        let on_loop = (DVec2::new(1.0, 4.0), 6.4, bd.loop_from + 5.0);
+        assert_eq!(bd.closest_on_loop(on_loop, goal, 0.75), on_loop);
+        // So does one met on the way in that the loop passes within the tolerance of.
+        let beside = DVec2::new(4.0, 2.6);
+        let passed = (beside, (goal - beside).length(), 6.6);
+        assert_eq!(bd.closest_on_loop(passed, goal, 0.75), passed);
     }
 
     #[test]
