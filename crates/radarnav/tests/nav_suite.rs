@@ -352,6 +352,35 @@ fn bug1_on_odometry_that_closed_its_loop_round_a_neighbour_leaves_from_that_loop
     assert_first_attempt(&run);
 }
 
+#[test]
+fn bug2_round_a_neighbour_the_m_line_misses_leaves_from_the_loop_s_nearest_open_point() {
+    // On a map drawn at random (and on this one, cut down to its two bushes), Bug2's radar
+    // follower hit the light bush on the m-line, took up the smaller one beside it (0.6 m
+    // apart) and closed its loop round that one, which the m-line never crosses: `no_path`
+    // at every standoff, both sides, on both poses. With no crossing nearer the goal on the
+    // loop, it now leaves from the loop's point nearest the goal where the way there is open.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let map =
+        TrialMap::new(Scenario::builtin("nav/bush-neighbour").expect("built-in")).expect("bug");
+    let runs: Vec<_> = [PoseSource::Truth, PoseSource::Odometry]
+        .par_iter()
+        .map(|&pose| {
+            let trial = Trial {
+                algorithm: BugAlgorithm::Bug2,
+                sensor: SensorClass::Radar,
+                pose,
+                seed: 1,
+            };
+            map.run(&trial).expect("the run starts")
+        })
+        .collect();
+    for run in &runs {
+        assert_first_attempt(run);
+    }
+}
+
 /// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
 fn laser_run(
     map: &TrialMap,

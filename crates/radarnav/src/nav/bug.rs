@@ -334,6 +334,9 @@ struct Boundary {
     /// behind because the way toward the goal was blocked there: (position, distance to the
     /// goal, distance followed).
     blocked_crossing: Option<(DVec2, f64, f64)>,
+    /// Bug2: the followed points where the way toward the goal was open, every
+    /// [`TRAIL_STEP`]: (position, distance to the goal, distance followed).
+    open: Vec<(DVec2, f64, f64)>,
     /// Bug1, once circled: the way to the closest point is the loop run backwards (shorter
     /// than going on).
     replay_back: bool,
@@ -366,6 +369,7 @@ impl Boundary {
             trail: Vec::new(),
             loop_from: 0.0,
             blocked_crossing: None,
+            open: Vec::new(),
             replay_back: false,
             replay_pending: false,
             replay: None,
@@ -421,6 +425,15 @@ impl Boundary {
             .unwrap_or(closest)
     }
 
+    /// Bug2, as the loop closes: the loop's followed point nearest the goal where the way
+    /// toward the goal was open, if it is nearer than the hit point by `by`.
+    fn open_on_loop(&self, by: f64) -> Option<(DVec2, f64, f64)> {
+        (self.open.iter())
+            .filter(|o| o.2 >= self.loop_from && o.1 < self.hit_goal_dist - by)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .copied()
+    }
+
     /// Takes back the last part of the followed path, which went `length` metres into a dead
     /// end the robot has left again for the followed point nearest `to`: following goes on
     /// from there as far followed as it was then. What was met in the dead end is forgotten
@@ -447,6 +460,7 @@ impl Boundary {
         self.away = self.away.filter(|a| *a <= t);
         self.leave = self.leave.filter(|l| *l <= t);
         self.blocked_crossing = self.blocked_crossing.filter(|c| c.2 <= t);
+        self.open.retain(|o| o.2 <= t);
         if self.closest.2 > t {
             let from = self.away.unwrap_or(f64::INFINITY);
             self.closest = self
@@ -1112,6 +1126,12 @@ impl BugController {
                         if closer || passing && bd.leave.is_some() {
                             bd.leave = Some(bd.travelled);
                         }
+                        if !goal_blocked
+                            && !bd.circled
+                            && (bd.open.last()).is_none_or(|o| bd.travelled - o.2 >= TRAIL_STEP)
+                        {
+                            bd.open.push((p, goal_dist, bd.travelled));
+                        }
                         if closer
                             && goal_blocked
                             && !bd.circled
@@ -1163,13 +1183,25 @@ impl BugController {
                         // gaps narrower than twice the standoff). Bug2 goes on round to the
                         // crossing nearest the goal and leaves there to take the neighbour
                         // up; the hit point that follows is nearer the goal, so this ends.
+                        // With no such crossing on the loop, the follower took up a neighbour
+                        // the m-line does not cross (beside the hit obstacle, closer to it than
+                        // twice the standoff): the loop round it meets the line nowhere nearer.
+                        // Bug2 then leaves as Bug1 would, from the loop's point nearest the
+                        // goal, but only where the way toward the goal was open (at a dead end
+                        // of a corridor round a goal it cannot reach, it is blocked: leaving
+                        // there would only hit again), and nearer than the hit point by as
+                        // much as a crossing must be, so each hit point is nearer and this
+                        // ends too.
                         if looped {
                             let ring: Vec<DVec2> = (bd.trail.iter())
                                 .filter(|s| s.2 >= bd.loop_from)
                                 .map(|s| s.0)
                                 .collect();
                             let beyond = beyond_boundary(&ring, goal, self.follower.side());
-                            match bd.blocked_crossing.filter(|c| c.2 >= bd.loop_from) {
+                            let leave_from = (bd.blocked_crossing)
+                                .filter(|c| c.2 >= bd.loop_from)
+                                .or_else(|| bd.open_on_loop(CLOSER_BY));
+                            match leave_from {
                                 Some(c) if !beyond => {
                                     bd.circled = true;
                                     bd.closest = c;
@@ -1198,7 +1230,7 @@ impl BugController {
                             }
                             if bd.travelled >= bd.leave_at + bd.loop_len / 2.0 {
                                 return self.no_path(
-                                    "bug2: the nearest blocked crossing was not met again within half a loop",
+                                    "bug2: the point to leave from (the nearest blocked crossing or open point) was not met again within half a loop",
                                     p,
                                     vehicle,
                                 );
@@ -1422,6 +1454,22 @@ mod tests {
         let beside = DVec2::new(4.0, 2.6);
         let passed = (beside, (goal - beside).length(), 6.6);
         assert_eq!(bd.closest_on_loop(passed, goal, 0.75), passed);
+    }
+
+    #[test]
+    fn bug2_leaves_a_loop_without_crossings_from_its_nearest_open_point() {
+        // `boundary` puts the hit point 10 m from the goal; the loop closed 5 m along.
+        let mut bd = boundary(DVec2::ZERO);
+        bd.loop_from = 5.0;
+        let at = |d: f64, along: f64| (DVec2::new(along, 0.0), d, along);
+        // Before the loop (never met again), on it but not nearer by enough, on it.
+        bd.open = vec![at(3.0, 2.0), at(9.9, 6.0), at(7.0, 8.0), at(8.0, 9.0)];
+        assert_eq!(bd.open_on_loop(CLOSER_BY), Some(at(7.0, 8.0)));
+        bd.open = vec![at(3.0, 2.0), at(9.9, 6.0)];
+        assert_eq!(bd.open_on_loop(CLOSER_BY), None);
+        // A loop closed at the hit point holds all of it.
+        bd.loop_from = 0.0;
+        assert_eq!(bd.open_on_loop(CLOSER_BY), Some(at(3.0, 2.0)));
     }
 
     #[test]

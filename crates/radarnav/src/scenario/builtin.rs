@@ -77,6 +77,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/bush-band.toml"),
     ),
     (
+        "nav/bush-neighbour",
+        include_str!("../../../../scenarios/nav/bush-neighbour.toml"),
+    ),
+    (
         "nav/bush-pocket",
         include_str!("../../../../scenarios/nav/bush-pocket.toml"),
     ),
