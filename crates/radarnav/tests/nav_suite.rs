@@ -237,22 +237,9 @@ fn bug2_following_the_room_wall_leaves_it_for_the_goal_in_sight() {
     // The follower took up the room wall and passed the goal 0.8 m off, beyond the m-line's
     // end: no crossing nearer than the hit point, and `no_path` (seed 2, laser, on the true
     // pose and on odometry). It now leaves for the goal it sees.
-    use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    use radarnav::trials::{SensorClass, Trial};
-    let map = TrialMap::new(Scenario::builtin("nav/crates-room").expect("built-in")).expect("bug");
-    let runs: Vec<_> = [PoseSource::Truth, PoseSource::Odometry]
-        .par_iter()
-        .map(|&pose| {
-            let trial = Trial {
-                algorithm: BugAlgorithm::Bug2,
-                sensor: SensorClass::Laser,
-                pose,
-                seed: 2,
-            };
-            map.run(&trial).expect("the run starts")
-        })
-        .collect();
+    use radarnav::trials::SensorClass;
+    let runs = both_poses("nav/crates-room", BugAlgorithm::Bug2, SensorClass::Laser, 2);
     assert_clean(&runs);
 }
 
@@ -359,26 +346,42 @@ fn bug2_round_a_neighbour_the_m_line_misses_leaves_from_the_loop_s_nearest_open_
     // apart) and closed its loop round that one, which the m-line never crosses: `no_path`
     // at every standoff, both sides, on both poses. With no crossing nearer the goal on the
     // loop, it now leaves from the loop's point nearest the goal where the way there is open.
-    use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    use radarnav::trials::{SensorClass, Trial};
-    let map =
-        TrialMap::new(Scenario::builtin("nav/bush-neighbour").expect("built-in")).expect("bug");
-    let runs: Vec<_> = [PoseSource::Truth, PoseSource::Odometry]
-        .par_iter()
-        .map(|&pose| {
-            let trial = Trial {
-                algorithm: BugAlgorithm::Bug2,
-                sensor: SensorClass::Radar,
-                pose,
-                seed: 1,
-            };
-            map.run(&trial).expect("the run starts")
-        })
-        .collect();
+    use radarnav::trials::SensorClass;
+    let runs = both_poses(
+        "nav/bush-neighbour",
+        BugAlgorithm::Bug2,
+        SensorClass::Radar,
+        1,
+    );
     for run in &runs {
         assert_first_attempt(run);
     }
+}
+
+/// Runs `sensor`'s Bug `algorithm` at `seed` on the built-in trial map `name`, on the true
+/// pose and on odometry (in that order).
+fn both_poses(
+    name: &str,
+    algorithm: radarnav::nav::BugAlgorithm,
+    sensor: radarnav::trials::SensorClass,
+    seed: u64,
+) -> Vec<radarnav::trials::TrialResult> {
+    use radarnav::map::PoseSource;
+    use radarnav::trials::Trial;
+    let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
+    [PoseSource::Truth, PoseSource::Odometry]
+        .par_iter()
+        .map(|&pose| {
+            let trial = Trial {
+                algorithm,
+                sensor,
+                pose,
+                seed,
+            };
+            map.run(&trial).expect("the run starts")
+        })
+        .collect()
 }
 
 /// One run of the laser's Bug `algorithm` on `map`, believing `pose`, at `seed`.
