@@ -77,10 +77,6 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         include_str!("../../../../scenarios/nav/bush-band.toml"),
     ),
     (
-        "nav/bush-neighbour",
-        include_str!("../../../../scenarios/nav/bush-neighbour.toml"),
-    ),
-    (
         "nav/bush-pocket",
         include_str!("../../../../scenarios/nav/bush-pocket.toml"),
     ),
@@ -224,6 +220,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
     (
         "nav/crates-aside",
         include_str!("../../../../scenarios/nav/crates-aside.toml"),
+    ),
+    (
+        "nav/bush-neighbour",
+        include_str!("../../../../scenarios/nav/bush-neighbour.toml"),
     ),
 ];
 
