@@ -39,7 +39,7 @@ fn every_trial_map_passes_in_one_configuration_each() {
 #[test]
 fn the_geometry_tells_reachable_from_closed_maps() {
     let reach = |name: &str| {
-        let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug mission");
+        let map = trial_map(name);
         [
             map.expectation(radarnav::trials::SensorClass::Radar)
                 .reachable,
@@ -68,7 +68,7 @@ fn bug2_gets_through_a_room_of_crates() {
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
     use radarnav::trials::{SensorClass, Trial};
-    let map = TrialMap::new(Scenario::builtin("nav/clutter").expect("built-in")).expect("bug");
+    let map = trial_map("nav/clutter");
     let trial = Trial {
         algorithm: BugAlgorithm::Bug2,
         sensor: SensorClass::Radar,
@@ -94,7 +94,7 @@ fn a_laser_robot_on_odometry_turns_among_tight_crates_without_touching_them() {
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
     use radarnav::trials::{SensorClass, Trial};
-    let map = TrialMap::new(Scenario::builtin("nav/crates-tight").expect("built-in")).expect("bug");
+    let map = trial_map("nav/crates-tight");
     for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
         let trial = Trial {
             algorithm,
@@ -128,7 +128,7 @@ fn bug1_in_a_dense_crate_room_leaves_for_the_neighbour_in_its_way_without_touchi
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
     use radarnav::trials::{SensorClass, Trial};
-    let map = TrialMap::new(Scenario::builtin("nav/crates-dense").expect("built-in")).expect("bug");
+    let map = trial_map("nav/crates-dense");
     for (pose, seed) in [(PoseSource::Truth, 2), (PoseSource::Odometry, 2)] {
         let trial = Trial {
             algorithm: BugAlgorithm::Bug1,
@@ -157,7 +157,7 @@ fn bug2_in_clusters_takes_up_the_neighbour_that_blocked_its_crossings() {
     let runs: Vec<_> = [("nav/crates-dense", 1), ("nav/bush-field", 3)]
         .par_iter()
         .map(|&(name, seed)| {
-            let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
+            let map = trial_map(name);
             laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, seed)
         })
         .collect();
@@ -211,7 +211,7 @@ fn bug1_on_the_true_pose_replays_its_loop_back_to_the_closest_point() {
     // path it followed back to the point.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
+    let map = trial_map("nav/bush-band");
     let run = laser_run(&map, BugAlgorithm::Bug1, PoseSource::Truth, 1);
     assert_clean(std::slice::from_ref(&run));
 }
@@ -225,7 +225,7 @@ fn a_turn_guard_backing_out_of_a_slot_keeps_the_room_its_way_in_gives() {
     // out of the slot and the robot is never stuck there.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/wall-slot").expect("built-in")).expect("bug");
+    let map = trial_map("nav/wall-slot");
     let run = laser_run(&map, BugAlgorithm::Bug1, PoseSource::Odometry, 1);
     assert_clean(std::slice::from_ref(&run));
     let why = failures(std::slice::from_ref(&run)).join("\n");
@@ -251,7 +251,7 @@ fn a_way_through_a_bush_band_that_turns_along_the_wall_is_followed_round_its_cor
     // (Bug2 back at its hit point on seed 1, Bug1 its closest point blocked on seed 2).
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
+    let map = trial_map("nav/bush-band");
     let runs: Vec<_> = [(BugAlgorithm::Bug2, 1), (BugAlgorithm::Bug1, 2)]
         .par_iter()
         .map(|&(algorithm, seed)| laser_run(&map, algorithm, PoseSource::Truth, seed))
@@ -268,7 +268,7 @@ fn a_way_seen_at_a_slant_by_a_noisy_laser_is_taken_for_its_width() {
     // added back to each pair of returns.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/gap-slant").expect("built-in")).expect("bug");
+    let map = trial_map("nav/gap-slant");
     let runs: Vec<_> = [(BugAlgorithm::Bug1, 1), (BugAlgorithm::Bug2, 3)]
         .par_iter()
         .map(|&(algorithm, seed)| laser_run(&map, algorithm, PoseSource::Truth, seed))
@@ -284,8 +284,7 @@ fn a_turn_stopped_in_a_slot_barely_wider_than_the_turning_circle_is_not_backed_o
     // 3 bumps (Bug2, true pose, seed 2) and 1 (Bug1, odometry, seed 1) on the north wall.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map =
-        TrialMap::new(Scenario::builtin("nav/slot-narrowing").expect("built-in")).expect("bug");
+    let map = trial_map("nav/slot-narrowing");
     let runs: Vec<_> = [
         (BugAlgorithm::Bug2, PoseSource::Truth, 2),
         (BugAlgorithm::Bug1, PoseSource::Odometry, 1),
@@ -306,7 +305,7 @@ fn a_hit_with_the_goal_off_the_far_side_takes_up_the_obstacle_in_the_goal_s_way(
     // follows the crate in the way and reaches the goal at the first standoff.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/crates-turn").expect("built-in")).expect("bug");
+    let map = trial_map("nav/crates-turn");
     let run = laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, 1);
     assert_first_attempt(&run);
 }
@@ -320,7 +319,7 @@ fn a_way_that_ends_beyond_an_opening_off_the_followed_side_is_left_through_the_o
     // at the first standoff.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/crates-aside").expect("built-in")).expect("bug");
+    let map = trial_map("nav/crates-aside");
     let run = laser_run(&map, BugAlgorithm::Bug2, PoseSource::Truth, 1);
     assert_first_attempt(&run);
 }
@@ -334,7 +333,7 @@ fn bug1_on_odometry_that_closed_its_loop_round_a_neighbour_leaves_from_that_loop
     // now taken on the loop itself, and the goal is reached at the first standoff.
     use radarnav::map::PoseSource;
     use radarnav::nav::BugAlgorithm;
-    let map = TrialMap::new(Scenario::builtin("nav/bush-band").expect("built-in")).expect("bug");
+    let map = trial_map("nav/bush-band");
     let run = laser_run(&map, BugAlgorithm::Bug1, PoseSource::Odometry, 2);
     assert_first_attempt(&run);
 }
@@ -359,6 +358,11 @@ fn bug2_round_a_neighbour_the_m_line_misses_leaves_from_the_loop_s_nearest_open_
     }
 }
 
+/// The built-in trial map `name`, ready for trials.
+fn trial_map(name: &str) -> TrialMap {
+    TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("a bug mission")
+}
+
 /// Runs `sensor`'s Bug `algorithm` at `seed` on the built-in trial map `name`, on the true
 /// pose and on odometry (in that order).
 fn both_poses(
@@ -369,7 +373,7 @@ fn both_poses(
 ) -> Vec<radarnav::trials::TrialResult> {
     use radarnav::map::PoseSource;
     use radarnav::trials::Trial;
-    let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
+    let map = trial_map(name);
     [PoseSource::Truth, PoseSource::Odometry]
         .par_iter()
         .map(|&pose| {
@@ -408,7 +412,7 @@ fn assert_retraced_clean(
     configs: &[(radarnav::nav::BugAlgorithm, radarnav::map::PoseSource)],
 ) {
     use radarnav::trials::Trial;
-    let map = TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("bug");
+    let map = trial_map(name);
     let runs: Vec<_> = configs
         .par_iter()
         .map(|&(algorithm, pose)| {
