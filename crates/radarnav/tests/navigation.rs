@@ -51,6 +51,22 @@ fn report(s: &RunSummary) -> BugReport {
 
 #[test]
 fn figure_13_and_14_scenarios_give_their_outcomes_with_both_algorithms_and_sensors() {
+    figure_scenarios_give_their_outcomes(1..=1);
+}
+
+/// The same over seeds 2 and 3: 32 more runs, most of them circling an enclosure to
+/// `no_path` with every standoff retry (about 160 s of the unoptimised `cargo test` on 2
+/// cores); CI runs it optimised (`cargo test --release -p radarnav --test navigation --
+/// --ignored`).
+#[test]
+#[ignore = "32 long runs; CI runs it with --release"]
+fn figure_13_and_14_scenarios_give_their_outcomes_on_more_seeds() {
+    figure_scenarios_give_their_outcomes(2..=3);
+}
+
+/// Every figure 13 and 14 scenario with both algorithms and both sensors on `seeds`: the
+/// outcome it shows, no bump, a hit point, and a leave point where the goal is reached.
+fn figure_scenarios_give_their_outcomes(seeds: std::ops::RangeInclusive<u64>) {
     let cases = [
         ("bug1-path", RunOutcome::Reached),
         ("bug2-path", RunOutcome::Reached),
@@ -61,7 +77,7 @@ fn figure_13_and_14_scenarios_give_their_outcomes_with_both_algorithms_and_senso
     for (name, want) in cases {
         for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
             for sensor in ["radar", "laser"] {
-                for seed in 1..=3 {
+                for seed in seeds.clone() {
                     jobs.push((name, want, algorithm, sensor, seed));
                 }
             }
