@@ -358,6 +358,20 @@ fn bug2_round_a_neighbour_the_m_line_misses_leaves_from_the_loop_s_nearest_open_
     }
 }
 
+#[test]
+fn a_radar_robot_in_a_room_finds_the_doorway_ahead() {
+    // The radar sees all round: the small room's walls close on themselves behind the robot,
+    // and the follower's gap search took the cut in its angle order there for the narrowest
+    // gap, never the 0.76 m doorway: `no_path` on every run with the radar.
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::SensorClass;
+    for algorithm in [BugAlgorithm::Bug1, BugAlgorithm::Bug2] {
+        for run in &both_poses("nav/door-room", algorithm, SensorClass::Radar, 1) {
+            assert_first_attempt(run);
+        }
+    }
+}
+
 /// The built-in trial map `name`, ready for trials.
 fn trial_map(name: &str) -> TrialMap {
     TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("a bug mission")

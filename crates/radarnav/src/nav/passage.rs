@@ -45,7 +45,9 @@
 //!
 //! Returns are taken in the order the sensor's rays swept (by angle about the sensor, not the
 //! robot's centre), and the gap's width is counted half a ray spacing narrower at each end:
-//! each end lies somewhere between its last return and the next ray, which passed.
+//! each end lies somewhere between its last return and the next ray, which passed. That order
+//! begins and ends behind the robot; a sensor that sees all round (a scanning radar in a room)
+//! sees the walls go on there, so a pair of returns whose line passes behind it is no gap.
 
 use glam::DVec2;
 
@@ -341,6 +343,23 @@ pub fn find_gap(
         })
         .collect();
     q.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let step = ray_spacing(&q);
+    // A sensor that sees all round (a scanning radar) closes the returns of a room on
+    // themselves behind the robot, where the angle order cuts them: the first and last
+    // segments are then one boundary, and their closest pair is the cut itself (two returns a
+    // ray apart behind the robot), which hid every gap between them (a doorway ahead in the
+    // room's wall: the doorway's posts lie in the first and last segments). A 270° laser's
+    // blind sector cuts them there anyway. So with returns close together across the cut and
+    // no blind sector, a pair whose line passes behind the sensor is no gap.
+    let closed = q.len() > 1 && {
+        let (first, last) = (q[0], q[q.len() - 1]);
+        first.0 + std::f64::consts::TAU - last.0 <= 2.5 * step
+            && (first.1 - last.1).length() <= min_width
+    };
+    let behind = |a: DVec2, b: DVec2| {
+        let (a, b) = (a - o, b - o);
+        a.y * b.y <= 0.0 && a.y != b.y && a.x + (b.x - a.x) * a.y / (a.y - b.y) < 0.0
+    };
     let mut starts = vec![0];
     for i in 1..q.len() {
         if (q[i].1 - q[i - 1].1).length() > min_width {
@@ -393,6 +412,9 @@ pub fn find_gap(
     let (mut best, mut pair) = (f64::INFINITY, (DVec2::ZERO, DVec2::ZERO));
     for &(pa, ra, sa) in &a {
         for &(pb, rb, sb) in &b {
+            if closed && behind(pa, pb) {
+                continue;
+            }
             let d2 = (pb - pa).length_squared();
             if !noisy {
                 if d2 < best {
@@ -417,7 +439,6 @@ pub fn find_gap(
     // Each end of the gap lies somewhere between its last return and the next ray, which
     // passed: half a ray spacing on average. Counted against the width, so that a gap
     // narrower than the robot's turning circle does not pass for one when seen from afar.
-    let step = ray_spacing(&q);
     let span = (pair.1 - pair.0).length();
     let best = if noisy { best } else { span };
     let width = best - 0.5 * step * ((pair.0 - o).length() + (pair.1 - o).length());
@@ -871,6 +892,33 @@ mod tests {
         let post = [walls[0], (DVec2::new(1.85, -1.0), DVec2::new(1.85, -1.3))];
         let g = gap(&scan(&post), -1.0, 0.71..3.0).expect("gap");
         assert!((g.width - 0.85).abs() < 0.05, "{g:?}");
+    }
+
+    #[test]
+    fn a_doorway_ahead_is_found_by_a_sensor_that_sees_all_round_in_a_closed_room() {
+        // A room 4 m wide closed 1.7 m behind the robot, its wall 1.2 m ahead holding a 0.76 m
+        // doorway into a second room. Seen all round, the room's returns close on themselves
+        // behind the robot: the doorway's posts lie in the first and last segments of the
+        // angle order, whose closest pair was the cut behind (no gap at all).
+        let walls = [
+            (DVec2::new(1.2, 2.0), DVec2::new(1.2, 0.38)),
+            (DVec2::new(1.2, -0.38), DVec2::new(1.2, -2.0)),
+            (DVec2::new(-1.7, -2.0), DVec2::new(4.3, -2.0)),
+            (DVec2::new(-1.7, 2.0), DVec2::new(4.3, 2.0)),
+            (DVec2::new(-1.7, -2.0), DVec2::new(-1.7, 2.0)),
+            (DVec2::new(4.3, -2.0), DVec2::new(4.3, 2.0)),
+        ];
+        let pts = scan(&walls);
+        for side in [1.0, -1.0] {
+            let g = gap(&pts, side, 0.71..3.0).expect("the doorway");
+            assert!((g.width - 0.76).abs() < 0.03, "{g:?}");
+            assert!((g.mid - DVec2::new(1.2, 0.0)).length() < 0.05, "{g:?}");
+            assert!((g.normal - DVec2::X).length() < 1e-9, "{g:?}");
+        }
+        // Closed behind but with no way ahead (the doorway shut): no gap.
+        let mut shut = walls.to_vec();
+        shut.push((DVec2::new(1.2, 0.38), DVec2::new(1.2, -0.38)));
+        assert_eq!(gap(&scan(&shut), 1.0, 0.71..3.0), None);
     }
 
     /// Returns every `step_deg` degrees seen from the robot-frame `origin`, in the robot

@@ -225,6 +225,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         "nav/bush-neighbour",
         include_str!("../../../../scenarios/nav/bush-neighbour.toml"),
     ),
+    (
+        "nav/door-room",
+        include_str!("../../../../scenarios/nav/door-room.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name` (a trial map is `nav/<name>`).
