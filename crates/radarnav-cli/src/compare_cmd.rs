@@ -12,12 +12,12 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
 use radarnav::Scenario;
+use radarnav::batch::map_longest_first;
 use radarnav::compare::{ExploreJob, ExploreResult, coverage_at, explore, robot_with_sensor};
 use radarnav::limits::budget::Budget;
 use radarnav::map::{MapConfig, Truth};
 use radarnav::nav::{BumperConfig, Strategy};
 use radarnav::render::{pixmap_from_rgb, save_png};
-use rayon::prelude::*;
 
 /// Distance at which the table compares coverage, m.
 const AT_DISTANCE: f64 = 10.0;
@@ -56,10 +56,13 @@ pub fn compare(a: &CompareArgs<'_>) -> Result<()> {
         .map_err(|m| anyhow::anyhow!("--safety: {m}"))?;
     let mission_robot = s.mission.as_ref().and_then(|m| m.robot.as_deref());
     // One truth raster per scan plane, shared by every run of that sensor.
-    let mut truths = BTreeMap::new();
+    let (mut truths, mut rays_per_s) = (BTreeMap::new(), BTreeMap::new());
     for sensor in a.sensors {
         let r = robot_with_sensor(s, mission_robot, sensor).with_context(|| "--sensors")?;
         let z = r.sensors[0].mount.z;
+        let c = &r.sensors[0].config;
+        let rays = c.azimuth_count() as f64 * c.elevations.len().max(1) as f64 * c.rate_hz;
+        rays_per_s.insert(sensor.clone(), rays);
         // The truth raster covers the world's bounds: refuse a world too large for it.
         let bounds = radarnav::render::world_region(&s.world);
         Budget::default().check_maps(["truth"], bounds, MapConfig::default().resolution)?;
@@ -97,9 +100,12 @@ pub fn compare(a: &CompareArgs<'_>) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let started = std::time::Instant::now();
-    let results = jobs
-        .par_iter()
-        .map(|job| {
+    // A run costs about its sensor's rays: the laser's runs go first, so that no core is
+    // left on one of them at the end.
+    let results = map_longest_first(
+        &jobs,
+        |job| rays_per_s[&job.sensor],
+        |job| {
             let r = explore(
                 s,
                 mission_robot,
@@ -110,8 +116,10 @@ pub fn compare(a: &CompareArgs<'_>) -> Result<()> {
             );
             bar.inc(1);
             r
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+        },
+    )
+    .into_iter()
+    .collect::<Result<Vec<_>, _>>()?;
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
     fs::create_dir_all(a.out).with_context(|| format!("creating {}", a.out.display()))?;

@@ -17,6 +17,7 @@
 #![warn(missing_docs)]
 
 pub mod accuracy;
+pub mod batch;
 pub mod compare;
 pub mod demo;
 pub mod limits;

@@ -9,7 +9,8 @@
 use glam::DVec2;
 use serde::Serialize;
 
-use super::walk::{CellIndex, CellWalk, cell_of, mark_crossed};
+use super::union::{UnionScratch, mark_union};
+use super::walk::{CellIndex, CellWalk, cell_of};
 
 /// `ln(p / (1 - p))`.
 pub fn logit(p: f64) -> f32 {
@@ -186,6 +187,8 @@ pub struct Grid {
     mark: Vec<u32>,
     /// Scratch of [`Grid::insert`]: the cells its rays crossed; all zero between updates.
     seen: Vec<u8>,
+    /// Scratch of [`mark_union`].
+    union: UnionScratch,
     updates: u32,
     /// The rectangle the grid may grow over (`None`: anywhere), m.
     limit: Option<(DVec2, DVec2)>,
@@ -211,6 +214,7 @@ impl Grid {
             passable: Vec::new(),
             mark: Vec::new(),
             seen: Vec::new(),
+            union: UnionScratch::default(),
             updates: 0,
             limit: None,
         }
@@ -491,13 +495,18 @@ impl Grid {
         // per update), so the walks only record that union, one byte store per visit: near
         // the sensor a dense scan crosses each cell many times. Then every cell of the union
         // that is not a return of this scan gets its miss, row by row over the scan's extent.
-        let seen = &mut self.seen[..];
         // Inside the grid: `ensure` covered both ends, so the whole segments.
         let (res, origin, width) = (self.resolution, self.origin, self.width);
-        let mut exact = true;
-        for b in beams {
-            exact &= mark_crossed(b.from, b.to, res, origin, width, seen);
-        }
+        let seen = &mut self.seen[..];
+        let exact = mark_union(
+            beams,
+            |b| (b.from, b.to),
+            res,
+            origin,
+            width,
+            seen,
+            &mut self.union,
+        );
         if !exact {
             // A ray passed within rounding of a cell corner (rare but for poses on the
             // lattice): the whole scan is walked instead, so its cells are the walk's.
@@ -513,16 +522,15 @@ impl Grid {
         // A return's cell takes its hit (once, however many rays end in it), not a miss,
         // though its ray crossed it. The hits and the misses fall on different cells, so
         // they may come in either order.
-        for b in beams.iter().filter(|b| b.hit) {
-            let Some(k) = self.index(self.cell_of(b.to)) else {
-                continue;
-            };
+        let ends = std::mem::take(&mut self.union.end_cells);
+        for (_, &k) in beams.iter().zip(&ends).filter(|(b, _)| b.hit) {
             self.seen[k] = 0;
             if self.mark[k] != stamp {
                 self.mark[k] = stamp;
                 self.apply(k, self.l_hit, Layers::Both);
             }
         }
+        self.union.end_cells = ends;
         let seen = &mut self.seen[..];
         let (lo_l, hi_l, miss) = (self.l_min, self.l_max, self.l_miss);
         let missed = |l: &mut f32| *l = (*l + miss).clamp(lo_l, hi_l);
@@ -606,6 +614,7 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::map::walk::mark_crossed;
 
     fn grid() -> Grid {
         Grid::new(0.1, Occupancy::default())

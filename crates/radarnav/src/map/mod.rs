@@ -1,6 +1,7 @@
 //! Occupancy-grid mapping that tells "seen through" from "passable" (DESIGN §5).
 //!
 //! * [`walk`]: the exact cell walk of a ray (Amanatides & Woo).
+//! * [`union`]: the cells a whole scan's rays cross, in chains of neighbouring rays.
 //! * [`grid`]: the growing two-layer log-odds grid (`sensed`, `passable`) and the cell
 //!   classes of the thesis' figure 15.
 //! * [`mapper`]: a simulation observer that inserts a robot's scans at the true or the
@@ -14,6 +15,7 @@ pub mod export;
 pub mod grid;
 pub mod mapper;
 pub mod truth;
+pub mod union;
 pub mod walk;
 
 pub use coverage::{CoverageSample, CoverageTrack, track_coverage};

@@ -96,17 +96,154 @@ impl CellWalk {
     }
 }
 
+/// A segment's crossings of the cell borders of its longer axis (the *major* axis), as
+/// [`mark_crossed`] steps them: crossing `i` lies between the major cells `major + i·step`
+/// and `major + (i + 1)·step`, and the cross cell beside both is `(y + i·b) >> FRACTION_BITS`
+/// (global, in 64-bit fixed point of [`FRACTION_BITS`] bits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Crossings {
+    /// Whether x is the major axis.
+    pub x_major: bool,
+    /// Major cell of the start.
+    pub major: i64,
+    /// Direction along the major axis: 1 or −1.
+    pub step: i64,
+    /// Borders crossed.
+    pub n: u64,
+    /// Cross coordinate at the first border, fixed point, global.
+    pub y: i64,
+    /// Its change per border.
+    pub b: i64,
+}
+
+/// A segment's start in cells: its coordinates and its cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Start {
+    /// The start divided by the cell size.
+    pub p: DVec2,
+    /// Its cell.
+    pub cell: CellIndex,
+}
+
+impl Start {
+    /// The start `from` over cells of size `resolution`.
+    pub fn new(from: DVec2, resolution: f64) -> Self {
+        let p = from / resolution;
+        Self {
+            p,
+            cell: (floor_i64(p.x), floor_i64(p.y)),
+        }
+    }
+}
+
+impl Crossings {
+    /// The cells of the ends of the segment from `from` to `to` over cells of size
+    /// `resolution`, and its crossings: `None` where [`mark_crossed`] gives way for other
+    /// reasons than a tie (too long for the fixed point, or rounding that leaves the
+    /// segment's cross extent).
+    pub fn new(from: DVec2, to: DVec2, resolution: f64) -> (CellIndex, CellIndex, Option<Self>) {
+        Self::from_start(Start::new(from, resolution), to, resolution)
+    }
+
+    /// [`Crossings::new`] from a segment start taken apart before (the rays of a scan
+    /// share theirs).
+    #[inline(always)]
+    pub fn from_start(
+        start: Start,
+        to: DVec2,
+        resolution: f64,
+    ) -> (CellIndex, CellIndex, Option<Self>) {
+        let (p, c0) = (start.p, start.cell);
+        let q = to / resolution;
+        let c1 = (floor_i64(q.x), floor_i64(q.y));
+        let d = q - p;
+        let x_major = d.x.abs() >= d.y.abs();
+        let (pm, pn, m0, m1, n0, n1, dm, dn) = if x_major {
+            (p.x, p.y, c0.0, c1.0, c0.1, c1.1, d.x, d.y)
+        } else {
+            (p.y, p.x, c0.1, c1.1, c0.0, c1.0, d.y, d.x)
+        };
+        let borders = m1.abs_diff(m0);
+        let s = if m1 > m0 { 1 } else { -1 };
+        let out = Self {
+            x_major,
+            major: m0,
+            step: s,
+            n: borders,
+            y: 0,
+            b: 0,
+        };
+        if borders == 0 {
+            // One cell along the longer axis, so at most two across: the two ends.
+            return (c0, c1, Some(out));
+        }
+        let lo = n0.min(n1);
+        let span = n0.max(n1) - lo;
+        let slope = dn / dm;
+        // The cross coordinate (from the segment's lowest cross index, so the integer part
+        // is the cell) at the first border crossed, and its change per border.
+        let first = if s > 0 { m0 + 1 } else { m0 };
+        let at_first = (pn - lo as f64) + (first as f64 - pm) * slope;
+        let fits = borders < MAX_FIXED_CELLS && span.unsigned_abs() < MAX_FIXED_CELLS;
+        if !fits || !at_first.is_finite() {
+            return (c0, c1, None);
+        }
+        let (a, b) = (
+            (at_first * ONE as f64) as i64,
+            (s as f64 * slope * ONE as f64) as i64,
+        );
+        // The crossings step by exactly `b`, so they lie between the first and the last: with
+        // both of those in the segment's cross extent (always, but at a tie), so is every
+        // one, and every cell marked is in the segment's bounding box.
+        let last = a + (borders as i64 - 1) * b;
+        if !(0..=span).contains(&(a >> FRACTION_BITS))
+            || !(0..=span).contains(&(last >> FRACTION_BITS))
+        {
+            return (c0, c1, None);
+        }
+        // Global: the lowest cross index times one cell (far from overflow for any grid
+        // that fits in memory, but checked).
+        let y = lo
+            .checked_mul(ONE)
+            .and_then(|l| l.checked_add(a))
+            .filter(|y| y.unsigned_abs() < 1 << 62);
+        (c0, c1, y.map(|y| Self { y, b, ..out }))
+    }
+
+    /// Whether a crossing comes within [`TIE`] of a cross border, where the walk may take
+    /// the other side of a cell corner than the fixed point does.
+    ///
+    /// Branch-free over the crossings (the sign bit of `fraction − 2·TIE` gathered by `or`),
+    /// which the compiler turns into vector code.
+    pub fn tie(&self) -> bool {
+        let mut y = self.y.wrapping_add(TIE_FIXED);
+        let mut near = 0i64;
+        for _ in 0..self.n {
+            near |= (y & (ONE - 1)) - 2 * TIE_FIXED;
+            y = y.wrapping_add(self.b);
+        }
+        near < 0
+    }
+
+    /// The cross cell of crossing `i`.
+    #[inline(always)]
+    pub fn cross(&self, i: u64) -> i64 {
+        (self.y + i as i64 * self.b) >> FRACTION_BITS
+    }
+}
+
 /// Sets `seen[k] = 1` for the storage index `k` of every cell the segment from `from` to
 /// `to` crosses, in a grid of `width` columns whose first cell is `origin` and which holds
 /// the whole segment: the cells of [`CellWalk`], the end cell included, unless it returns
-/// `false`. The mapper's inner loop, where only the union of a scan's cells counts.
+/// `false`. The mapper's rays go through [`mark_union`](super::union::mark_union), which
+/// marks a whole scan's at once; this is its rule for one segment.
 ///
 /// Why not the walk itself: it decides every step by comparing two running border
 /// parameters, a chain where each step waits for the one before and mispredicted branches
 /// take most of the time. Here the cross coordinate where the segment crosses each border
-/// of its longer axis is stepped in 64-bit fixed point, each crossing floored on its own:
-/// the cells beside each crossing are all the cells, as the segment moves at most one cell
-/// across per cell along. No branch depends on the data.
+/// of its longer axis is stepped in 64-bit fixed point, each crossing floored on its own
+/// ([`Crossings`]): the cells beside each crossing are all the cells, as the segment moves
+/// at most one cell across per cell along. No branch depends on the data.
 ///
 /// Which side of a corner the walk takes is decided by rounding where the segment passes
 /// within rounding of it. So when a crossing comes within [`TIE`] of a cross border (far
@@ -124,103 +261,40 @@ pub fn mark_crossed(
     width: usize,
     seen: &mut [u8],
 ) -> bool {
-    let (p, q) = (from / resolution, to / resolution);
-    let (c0, c1) = (
-        (floor_i64(p.x), floor_i64(p.y)),
-        (floor_i64(q.x), floor_i64(q.y)),
-    );
-    let w = width as i64;
-    let index = |c: CellIndex| ((c.1 - origin.1) * w + (c.0 - origin.0)) as usize;
-    let d = q - p;
-    let x_major = d.x.abs() >= d.y.abs();
-    // Along the longer axis (`major`), with the storage strides of both axes.
-    let (pm, pn, m0, m1, n0, n1, dm, dn, sm, sn) = if x_major {
-        (p.x, p.y, c0.0, c1.0, c0.1, c1.1, d.x, d.y, 1, w)
-    } else {
-        (p.y, p.x, c0.1, c1.1, c0.0, c1.0, d.y, d.x, w, 1)
-    };
-    let borders = m1.abs_diff(m0);
-    let lo = n0.min(n1);
-    let span = n0.max(n1) - lo;
-    // Both ends inside the grid's columns and rows: then so is every cell of the segment's
-    // bounding box, which the stores below never leave.
+    let (w, len) = (width as i64, seen.len() as u64);
     // A column inside and a storage index inside put the row inside (no division).
-    let held = |c: CellIndex| match (c.0.checked_sub(origin.0), c.1.checked_sub(origin.1)) {
-        (Some(i), Some(j)) if (0..w).contains(&i) && j >= 0 => j
-            .checked_mul(w)
-            .and_then(|r| r.checked_add(i))
-            .is_some_and(|k| (k as u64) < seen.len() as u64),
-        _ => false,
+    let index = |c: CellIndex| -> Option<usize> {
+        let (i, j) = (c.0.checked_sub(origin.0)?, c.1.checked_sub(origin.1)?);
+        let k = j.checked_mul(w)?.checked_add(i)?;
+        ((0..w).contains(&i) && j >= 0 && (k as u64) < len).then_some(k as usize)
     };
-    assert!(held(c0) && held(c1), "the grid holds the segment");
-    seen[index(c0)] = 1;
-    seen[index(c1)] = 1;
-    if borders == 0 {
-        // One cell along the longer axis, so at most two across: the two ends.
-        return true;
-    }
-    let s = if m1 > m0 { 1 } else { -1 };
-    let slope = dn / dm;
-    // The cross coordinate (from the segment's lowest cross index, so the integer part is
-    // the cell) at the first border crossed, and its change per border.
-    let first = if s > 0 { m0 + 1 } else { m0 };
-    let at_first = (pn - lo as f64) + (first as f64 - pm) * slope;
-    let fits = borders < MAX_FIXED_CELLS && span.unsigned_abs() < MAX_FIXED_CELLS;
-    if !fits || !at_first.is_finite() {
+    let (c0, c1, crossings) = Crossings::new(from, to, resolution);
+    let (Some(k0), Some(k1)) = (index(c0), index(c1)) else {
+        panic!("the grid holds the segment");
+    };
+    seen[k0] = 1;
+    seen[k1] = 1;
+    let Some(c) = crossings else {
         return false;
-    }
-    let (a, b) = (
-        (at_first * ONE as f64) as i64,
-        (f64::from(s) * slope * ONE as f64) as i64,
-    );
-    // The crossings step by exactly `b`, so they lie between the first and the last: with
-    // both of those in the segment's cross extent (always, but at a tie), so is every one,
-    // and every cell below is in the segment's bounding box, inside `seen` (asserted above).
-    let last = a + (borders as i64 - 1) * b;
-    if !(0..=span).contains(&(a >> FRACTION_BITS)) || !(0..=span).contains(&(last >> FRACTION_BITS))
-    {
-        return false;
-    }
-    let step = i64::from(s) * sm;
-    // The cells beside crossing m: (m, across) and (m + 1, across) along the major axis.
-    let (mut y, mut k) = (a, index(c0) as i64 + (lo - n0) * sn);
-    // The lowest `(fraction + TIE) mod 1` of all crossings: below 2·TIE at a tie.
-    let mut nearest = u64::MAX;
-    let (len, cells) = (seen.len(), seen.as_mut_ptr());
-    if x_major {
-        // Side by side in storage: one two-byte store, from the lower of the two.
-        k += step.min(0);
-        for _ in 0..borders {
-            let here = (k + (y >> FRACTION_BITS) * sn) as usize;
-            debug_assert!(here + 1 < len);
-            // SAFETY: cells `here` and `here + 1` are in the segment's bounding box.
-            unsafe { cells.add(here).cast::<[u8; 2]>().write_unaligned([1, 1]) };
-            nearest = nearest.min(((y + TIE_FIXED) & (ONE - 1)) as u64);
-            y += b;
-            k += step;
-        }
-    } else {
-        for _ in 0..borders {
-            let here = (k + (y >> FRACTION_BITS)) as usize;
-            let next = here.wrapping_add_signed(step as isize);
-            debug_assert!(here.max(next) < len);
-            // SAFETY: cells `here` and `next` are in the segment's bounding box.
-            unsafe {
-                cells.add(here).write(1);
-                cells.add(next).write(1);
-            }
-            nearest = nearest.min(((y + TIE_FIXED) & (ONE - 1)) as u64);
-            y += b;
-            k += step;
+    };
+    for i in 0..c.n {
+        let m = c.major + i as i64 * c.step;
+        for major in [m, m + c.step] {
+            let cell = if c.x_major {
+                (major, c.cross(i))
+            } else {
+                (c.cross(i), major)
+            };
+            seen[index(cell).expect("in the segment's bounding box")] = 1;
         }
     }
-    nearest >= 2 * TIE_FIXED as u64
+    !c.tie()
 }
 
 /// Fraction bits of the fixed-point cross coordinate of [`mark_crossed`].
-const FRACTION_BITS: u32 = 40;
+pub(crate) const FRACTION_BITS: u32 = 40;
 /// One cell in that fixed point.
-const ONE: i64 = 1 << FRACTION_BITS;
+pub(crate) const ONE: i64 = 1 << FRACTION_BITS;
 /// Segments this long or wide, in cells, are walked: the fixed point holds 2²³ cells, and
 /// the walk's running sums drift by up to about 2·n²·10⁻¹⁶ cells over n cells (2·10⁻⁸ at
 /// this length), which must stay below [`TIE`].
@@ -230,7 +304,7 @@ const MAX_FIXED_CELLS: u64 = 10_000;
 /// step), and rare: in `compare foliage-wall`, 3.6 % of the scans have such a crossing
 /// (most of them from poses on the lattice, as at a start).
 pub const TIE: f64 = 1.0 / (1u64 << 24) as f64;
-const TIE_FIXED: i64 = ONE >> 24;
+pub(crate) const TIE_FIXED: i64 = ONE >> 24;
 
 impl Iterator for CellWalk {
     type Item = CellIndex;
