@@ -225,21 +225,20 @@ fn mark_run(
         }
         let until = s.linked[t.pair as usize].max(t.from);
         mark_between(a, b, t.from..until, origin, w, seen);
-        if t.pair != NONE {
-            let j = t.pair;
-            s.tasks.push(Task {
-                u: t.u,
-                v: j,
-                from: until,
-                pair: s.left[j as usize],
-            });
-            s.tasks.push(Task {
-                u: j + 1,
-                v: t.v,
-                from: until,
-                pair: s.right[j as usize],
-            });
-        }
+        // Past `until`, the rays either side of the pair that parts go on as two chains.
+        let j = t.pair;
+        s.tasks.push(Task {
+            u: t.u,
+            v: j,
+            from: until,
+            pair: s.left[j as usize],
+        });
+        s.tasks.push(Task {
+            u: j + 1,
+            v: t.v,
+            from: until,
+            pair: s.right[j as usize],
+        });
     }
     true
 }
