@@ -5,7 +5,7 @@
 //! of a degree apart, so out to 11 m at 5 cm cells neighbouring rays cross the same cells or
 //! cells side by side. Walking every ray stored each cell several times.
 //!
-//! Here the rays' crossings of their longer axis' borders ([`Crossings`]) are taken in
+//! Here the rays' crossings of their longer axis' borders (`walk::Crossings`) are taken in
 //! chains: rays that start in the same cell along the same axis and direction cross the same
 //! borders, and at a border where each ray of a run lies in the same cell as its neighbour
 //! or the next one across, always the same way round, the run's cells there are every cell

@@ -242,7 +242,7 @@ impl Crossings {
 /// parameters, a chain where each step waits for the one before and mispredicted branches
 /// take most of the time. Here the cross coordinate where the segment crosses each border
 /// of its longer axis is stepped in 64-bit fixed point, each crossing floored on its own
-/// ([`Crossings`]): the cells beside each crossing are all the cells, as the segment moves
+/// (`Crossings`): the cells beside each crossing are all the cells, as the segment moves
 /// at most one cell across per cell along. No branch depends on the data.
 ///
 /// Which side of a corner the walk takes is decided by rounding where the segment passes
