@@ -78,13 +78,15 @@ pub fn mark_union<B>(
     scratch: &mut UnionScratch,
 ) -> bool {
     let (w, len) = (width as i64, seen.len() as u64);
+    // Checked all the way: every later store (some unchecked) lies in the box of a
+    // segment's two end cells, which this proves inside the grid.
     let index = |c: CellIndex| -> usize {
-        let (i, j) = (c.0 - origin.0, c.1 - origin.1);
-        assert!(
-            (0..w).contains(&i) && j >= 0 && ((j * w + i) as u64) < len,
-            "the grid holds the segment"
-        );
-        (j * w + i) as usize
+        let k = (c.0.checked_sub(origin.0))
+            .zip(c.1.checked_sub(origin.1))
+            .filter(|&(i, j)| (0..w).contains(&i) && j >= 0)
+            .and_then(|(i, j)| j.checked_mul(w)?.checked_add(i))
+            .filter(|&k| (k as u64) < len);
+        k.expect("the grid holds the segment") as usize
     };
     scratch.rays.clear();
     scratch.end_cells.clear();
