@@ -25,7 +25,7 @@
 
 use glam::DVec2;
 
-use super::walk::{CellIndex, CellWalk, Crossings, FRACTION_BITS, ONE, Start, TIE_FIXED};
+use super::walk::{CellIndex, CellWalk, Crossings, FRACTION_BITS, ONE, Start};
 
 /// Scratch of [`mark_union`], kept between scans so that it allocates once.
 #[derive(Clone, Debug, Default)]
@@ -146,7 +146,7 @@ fn mark_run(
 ) -> bool {
     let w = width as i64;
     if let [ray] = run {
-        return mark_alone::<true>(ray, 0, origin, w, seen);
+        return ray.mark::<true>(0, origin, w, seen);
     }
     // How long each pair of neighbours stays chained: from the first border, while the
     // later ray's cross coordinate lies within one cell of the earlier one's, on the same
@@ -183,9 +183,7 @@ fn mark_run(
     // Rays too far apart to share cells beyond their first few crossings (a radar's, a
     // degree apart) are marked one by one: chains would only cost their bookkeeping.
     if s.linked.iter().sum::<u64>() < MIN_CHAINED * run.len() as u64 {
-        return run
-            .iter()
-            .all(|ray| mark_alone::<true>(ray, 0, origin, w, seen));
+        return run.iter().all(|ray| ray.mark::<true>(0, origin, w, seen));
     }
     // A chain marks the cells between its outer rays, so every ray must be exact first.
     if run.iter().any(Crossings::tie) {
@@ -222,7 +220,7 @@ fn mark_run(
     while let Some(t) = s.tasks.pop() {
         let (a, b) = (&run[t.u as usize], &run[t.v as usize]);
         if t.pair == NONE {
-            mark_alone::<false>(a, t.from, origin, w, seen);
+            a.mark::<false>(t.from, origin, w, seen);
             continue;
         }
         let until = s.linked[t.pair as usize].max(t.from);
@@ -243,78 +241,6 @@ fn mark_run(
         });
     }
     true
-}
-
-/// Marks the cells beside the crossings of `ray` from crossing `from` on; with `CHECK`,
-/// `false` when a crossing lies within a tie of a cross border ([`Crossings::tie`], taken
-/// in the same pass).
-fn mark_alone<const CHECK: bool>(
-    ray: &Crossings,
-    from: u64,
-    origin: CellIndex,
-    w: i64,
-    seen: &mut [u8],
-) -> bool {
-    if from >= ray.n {
-        return true;
-    }
-    // The ray's cells are in its bounding box, in the grid: so are the corners of the
-    // box of its crossings from `from` on, checked here once.
-    let (first, last) = (ray.cross(from), ray.cross(ray.n - 1));
-    let (m0, m1) = (
-        ray.major + from as i64 * ray.step,
-        ray.major + ray.n as i64 * ray.step,
-    );
-    let (cross, major) = ((first.min(last), first.max(last)), (m0.min(m1), m0.max(m1)));
-    let (x, y) = if ray.x_major {
-        (major, cross)
-    } else {
-        (cross, major)
-    };
-    let (x, y) = (
-        (x.0 - origin.0, x.1 - origin.0),
-        (y.0 - origin.1, y.1 - origin.1),
-    );
-    assert!(
-        x.0 >= 0 && y.0 >= 0 && x.1 < w && (y.1 + 1) * w <= seen.len() as i64,
-        "the grid holds the segment"
-    );
-    let cells = seen.as_mut_ptr();
-    let mut yy = ray.y + from as i64 * ray.b;
-    let near = ray.major.min(ray.major + ray.step) + from as i64 * ray.step;
-    let mut near_tie = 0;
-    let tie = |y: i64| (y.wrapping_add(TIE_FIXED) & (ONE - 1)) - 2 * TIE_FIXED;
-    if ray.x_major {
-        // The two cells side by side: one two-byte store.
-        let mut k = near - origin.0 - origin.1 * w;
-        for _ in from..ray.n {
-            let here = (k + (yy >> FRACTION_BITS) * w) as usize;
-            // SAFETY: both cells lie in the box checked above.
-            unsafe { cells.add(here).cast::<[u8; 2]>().write_unaligned([1, 1]) };
-            if CHECK {
-                near_tie |= tie(yy);
-            }
-            yy += ray.b;
-            k += ray.step;
-        }
-    } else {
-        let mut k = (near - origin.1) * w - origin.0;
-        let (step, w) = (ray.step * w, w as usize);
-        for _ in from..ray.n {
-            let here = (k + (yy >> FRACTION_BITS)) as usize;
-            // SAFETY: both cells lie in the box checked above.
-            unsafe {
-                cells.add(here).write(1);
-                cells.add(here + w).write(1);
-            }
-            if CHECK {
-                near_tie |= tie(yy);
-            }
-            yy += ray.b;
-            k += step;
-        }
-    }
-    near_tie >= 0
 }
 
 /// Marks, at each crossing in `crossings`, the cells on both sides of the border from ray

@@ -225,6 +225,84 @@ impl Crossings {
         near < 0
     }
 
+    /// Sets `seen[k] = 1` for the cells beside the crossings from crossing `from` on, in a
+    /// grid of `w` columns whose first cell is `origin` and which holds the segment; with
+    /// `CHECK`, `false` when a crossing lies within [`TIE`] of a cross border (as
+    /// [`Crossings::tie`], in the same pass).
+    ///
+    /// # Panics
+    /// If the grid does not hold the segment's crossings.
+    pub fn mark<const CHECK: bool>(
+        &self,
+        from: u64,
+        origin: CellIndex,
+        w: i64,
+        seen: &mut [u8],
+    ) -> bool {
+        let ray = self;
+        if from >= ray.n {
+            return true;
+        }
+        // The ray's cells are in its bounding box, in the grid: so are the corners of the
+        // box of its crossings from `from` on, checked here once.
+        let (first, last) = (ray.cross(from), ray.cross(ray.n - 1));
+        let (m0, m1) = (
+            ray.major + from as i64 * ray.step,
+            ray.major + ray.n as i64 * ray.step,
+        );
+        let (cross, major) = ((first.min(last), first.max(last)), (m0.min(m1), m0.max(m1)));
+        let (x, y) = if ray.x_major {
+            (major, cross)
+        } else {
+            (cross, major)
+        };
+        let (x, y) = (
+            (x.0 - origin.0, x.1 - origin.0),
+            (y.0 - origin.1, y.1 - origin.1),
+        );
+        let rows_end = y.1.checked_add(1).and_then(|r| r.checked_mul(w));
+        assert!(
+            x.0 >= 0 && y.0 >= 0 && x.1 < w && rows_end.is_some_and(|e| e <= seen.len() as i64),
+            "the grid holds the segment"
+        );
+        let cells = seen.as_mut_ptr();
+        let mut yy = ray.y + from as i64 * ray.b;
+        let near = ray.major.min(ray.major + ray.step) + from as i64 * ray.step;
+        let mut near_tie = 0;
+        let tie = |y: i64| (y.wrapping_add(TIE_FIXED) & (ONE - 1)) - 2 * TIE_FIXED;
+        if ray.x_major {
+            // The two cells side by side: one two-byte store.
+            let mut k = near - origin.0 - origin.1 * w;
+            for _ in from..ray.n {
+                let here = (k + (yy >> FRACTION_BITS) * w) as usize;
+                // SAFETY: both cells lie in the box checked above.
+                unsafe { cells.add(here).cast::<[u8; 2]>().write_unaligned([1, 1]) };
+                if CHECK {
+                    near_tie |= tie(yy);
+                }
+                yy += ray.b;
+                k += ray.step;
+            }
+        } else {
+            let mut k = (near - origin.1) * w - origin.0;
+            let (step, w) = (ray.step * w, w as usize);
+            for _ in from..ray.n {
+                let here = (k + (yy >> FRACTION_BITS)) as usize;
+                // SAFETY: both cells lie in the box checked above.
+                unsafe {
+                    cells.add(here).write(1);
+                    cells.add(here + w).write(1);
+                }
+                if CHECK {
+                    near_tie |= tie(yy);
+                }
+                yy += ray.b;
+                k += step;
+            }
+        }
+        near_tie >= 0
+    }
+
     /// The cross cell of crossing `i`.
     #[inline(always)]
     pub fn cross(&self, i: u64) -> i64 {
@@ -277,18 +355,7 @@ pub fn mark_crossed(
     let Some(c) = crossings else {
         return false;
     };
-    for i in 0..c.n {
-        let m = c.major + i as i64 * c.step;
-        for major in [m, m + c.step] {
-            let cell = if c.x_major {
-                (major, c.cross(i))
-            } else {
-                (c.cross(i), major)
-            };
-            seen[index(cell).expect("in the segment's bounding box")] = 1;
-        }
-    }
-    !c.tie()
+    c.mark::<true>(0, origin, w, seen)
 }
 
 /// Fraction bits of the fixed-point cross coordinate of [`mark_crossed`].
