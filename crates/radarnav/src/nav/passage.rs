@@ -22,7 +22,8 @@
 //! A gap is often the mouth of a longer way between two sides (a crate 1.5 m long beside a
 //! wall, a corridor): beyond the gap the robot drives on centred between them while they are
 //! nearer together than twice the follow radius, turns about on the spot at a dead end and
-//! comes back out the same way (which is how the boundary goes on), and hands back to the
+//! comes back out the same way (which is how the boundary goes on; a way that narrows below
+//! the turning circle ends there likewise, though the body would pass), and hands back to the
 //! follower where the way widens, or where it ends ahead but turns off to one side (an L
 //! between a hedge's end and a room wall: the follower takes the corner, keeping its side).
 //! A dead end with no room to turn about is backed out of. Where the followed side opens on
@@ -282,6 +283,35 @@ pub fn room_to_turn(points: &[DVec2], length: f64, width: f64, max: f64, sign: f
 /// of it (unit test), and the laser robot takes the 0.75 m way of `nav/gap-slant`.
 const NOISE_PULL: f64 = 1.5;
 
+/// How many σ of range noise at each end of a pair of returns the way ahead of a passage may
+/// look narrower than it is before it counts as narrower than the turning circle
+/// ([`Passage::with_noise`]): the narrowest pair ahead is the least of dozens of noisy
+/// distances (2.4σ below their mean at n = 70), each end pulled in.
+const NARROWING_PULL: f64 = 2.5;
+
+/// The narrowest pair of robot-frame returns, one left and one right of the body's width
+/// (with [`BODY_MARGIN`]), that the centre of a body of `length` × `width` m driving straight
+/// on passes between within `reach` metres: the line between them crosses its axis there.
+/// Infinite without one.
+fn narrowest_ahead(points: &[DVec2], length: f64, width: f64, reach: f64) -> f64 {
+    let half = width / 2.0 + BODY_MARGIN;
+    let near =
+        |q: &&DVec2| (-length / 2.0..=reach + length / 2.0).contains(&q.x) && q.y.abs() > half;
+    let (left, right): (Vec<&DVec2>, Vec<&DVec2>) =
+        points.iter().filter(near).partition(|q| q.y > 0.0);
+    let mut best = f64::INFINITY;
+    for l in &left {
+        for r in &right {
+            // Where the line from l to r crosses the axis (y = 0).
+            let x = l.x + (r.x - l.x) * l.y / (l.y - r.y);
+            if (0.0..=reach).contains(&x) {
+                best = best.min(l.distance(**r));
+            }
+        }
+    }
+    best
+}
+
 /// Points across a gap checked for being seen open (the pair's ends excluded).
 const GAP_SAMPLES: usize = 6;
 /// A return within this angle of a point hides it, rad (1°, a radar's ray spacing).
@@ -532,6 +562,10 @@ pub struct Passage {
     /// The last gap seen off the followed side of the way (world frame), see
     /// [`Passage::note_aside`].
     aside: Option<Gap>,
+    /// How much narrower than the body's turning circle the returns may put the way ahead
+    /// before it counts as closed: the range noise that pulls a pair across it, m (0 for a
+    /// noise-free sensor).
+    noise_pull: f64,
 }
 
 /// What a passage step asks for.
@@ -567,6 +601,15 @@ impl Passage {
             backing: false,
             backing_out: false,
             aside: None,
+            noise_pull: 0.0,
+        }
+    }
+
+    /// This passage for returns with range noise `sigma` (m, one σ) across the way ahead.
+    pub fn with_noise(self, sigma: f64) -> Self {
+        Self {
+            noise_pull: 2.0 * NARROWING_PULL * sigma,
+            ..self
         }
     }
 
@@ -763,6 +806,15 @@ impl Passage {
             clear(&|q| q.x <= half.0 + 0.15 && q.x >= -half.0 - BODY_MARGIN && q.y.abs() <= half.1);
         let behind_clear = behind_clear(points, length, width);
         let turn_clear = turn_clear(points, length, width);
+        // Beyond the gap the way may narrow below what the gap was let through for: the
+        // turning circle, which the robot's disc needs (where the trials' geometry calls a
+        // way closed). Centred, the body would squeeze on between two obstacles a few
+        // centimetres either side of it, to a goal beyond that only a narrower robot could
+        // reach; there the way ends as at a wall ahead (turn about, or back out).
+        let turning = length.hypot(width);
+        let narrowing = self.phase == Phase::Through
+            && narrowest_ahead(points, length, width, half.0 + 0.15) + self.noise_pull < turning;
+        let ahead_clear = ahead_clear && !narrowing;
         if self.phase == Phase::Retreat {
             return if v == 0.0 || behind_clear {
                 PassStep::Drive(v, omega)
@@ -1224,6 +1276,34 @@ mod tests {
         let pose = drive_through(&walls, Pose::default());
         assert!(pose.y > -1.0, "{pose:?}");
         assert!(wrap_angle(pose.yaw - FRAC_PI_2).abs() < 0.3, "{pose:?}");
+    }
+
+    #[test]
+    fn a_way_narrowing_below_the_turning_circle_ends_there_though_the_body_would_pass() {
+        // Behind a 1 m doorway the way narrows evenly to 0.62 m at 2.5 m in and goes on
+        // 0.62 m wide into the open room beyond, y < -5: wide enough for the body (0.497 m
+        // and 2 cm a side), not for its turning circle (0.711 m), which is where the trials'
+        // geometry calls the way closed. The robot does not squeeze on past where the way
+        // gets narrower than that circle: it gives the gap up (backing out until it can turn,
+        // for the follower to go on) or turns about and comes back out.
+        let (narrow, at) = (0.62, -3.5);
+        let inset = (1.0 - narrow) / 2.0;
+        let mut walls = doorway(1.0);
+        walls.extend([
+            (DVec2::new(1.0, -1.0), DVec2::new(1.0 + inset, at)),
+            (DVec2::new(1.0 + inset, at), DVec2::new(1.0 + inset, -5.0)),
+            (DVec2::new(2.0, -1.0), DVec2::new(2.0 - inset, at)),
+            (DVec2::new(2.0 - inset, at), DVec2::new(2.0 - inset, -5.0)),
+        ]);
+        let mut deepest = f64::INFINITY;
+        let (end, pose, _) = drive(&walls, Pose::default(), |_, p| deepest = deepest.min(p.y));
+        // Where the sides are 0.711 m apart.
+        let turning_at = -1.0 + (at + 1.0) * (1.0 - 0.711) / (1.0 - narrow);
+        assert!(deepest > turning_at - 0.3, "went {deepest} m in");
+        assert!(
+            end == PassStep::Blocked || pose.y > -1.0,
+            "{end:?} at {pose:?}"
+        );
     }
 
     #[test]

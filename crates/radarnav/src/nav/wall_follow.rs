@@ -245,7 +245,10 @@ impl WallFollower {
                         (seen.mid - mid).length() > 1.0 || g.travelled - at > TAU * radius + 2.0
                     });
                     if fresh && !dead_end {
-                        g.passage = Some(Passage::new(seen, 2.0 * radius, self.speed));
+                        g.passage = Some(
+                            Passage::new(seen, 2.0 * radius, self.speed)
+                                .with_noise(b.noise().sigma(radius)),
+                        );
                     }
                 }
                 _ => {}
@@ -255,7 +258,8 @@ impl WallFollower {
         let mut step = passage.step(pose, b.clearance(), g.length, g.width, dt);
         if let PassStep::Aside(aside) = step {
             g.done = Some((passage.gap().mid, g.travelled));
-            *passage = Passage::new(aside, 2.0 * radius, self.speed);
+            *passage =
+                Passage::new(aside, 2.0 * radius, self.speed).with_noise(b.noise().sigma(radius));
             step = passage.step(pose, b.clearance(), g.length, g.width, dt);
         }
         match step {

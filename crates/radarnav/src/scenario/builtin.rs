@@ -229,6 +229,10 @@ pub const NAV_SUITE: &[(&str, &str)] = &[
         "nav/door-room",
         include_str!("../../../../scenarios/nav/door-room.toml"),
     ),
+    (
+        "nav/crates-squeeze",
+        include_str!("../../../../scenarios/nav/crates-squeeze.toml"),
+    ),
 ];
 
 /// The TOML source of the built-in scenario `name` (a trial map is `nav/<name>`).
