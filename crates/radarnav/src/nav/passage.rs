@@ -33,6 +33,13 @@
 //! left through it (a new passage) rather than by turning about, which would hand the
 //! follower the other side's boundary back out of the way.
 //!
+//! A gap can be no way at all: found where a face just behind it is seen edge-on (a crate
+//! beside the far post, its face running away from the sensor from the near post's end),
+//! the returns show the near post's end, the far post, and the far side seen through the
+//! slit between them. Drawing near, the face comes into view across the body's strip past
+//! the gap's line, and the gap is given up there, in the open, rather than from a pocket
+//! in front of the face where everything round lies inside the follower's distance.
+//!
 //! A gap can look wider from afar than the way through it is (returns on box corners, range
 //! noise): where the body's clearance ahead blocks the pass, the robot backs out and tries
 //! again, and after three tries gives the gap up, backing out until the body can turn on the
@@ -566,6 +573,9 @@ pub struct Passage {
     /// before it counts as closed: the range noise that pulls a pair across it, m (0 for a
     /// noise-free sensor).
     noise_pull: f64,
+    /// Whether a face stood across the way just past the gap when the passage began
+    /// ([`Passage::face_across`]; `None` before its first step).
+    face_at_start: Option<bool>,
 }
 
 /// What a passage step asks for.
@@ -602,6 +612,7 @@ impl Passage {
             backing_out: false,
             aside: None,
             noise_pull: 0.0,
+            face_at_start: None,
         }
     }
 
@@ -637,6 +648,26 @@ impl Passage {
     /// The world-frame gap being passed.
     pub fn gap(&self) -> &Gap {
         &self.gap
+    }
+
+    /// Whether [`HITS_TO_BLOCK`] of `points` (robot frame, at `pose`) stand across the
+    /// middle half of the body's strip through the gap, between the gap's line and as deep
+    /// past it as the body's front reaches with its centre on the line: the way through is
+    /// closed right behind the gap. Returns at the strip's edges are the way's sides
+    /// leaning in, or the gap's line held a little off, which the pass steers and backs off.
+    fn face_across(&self, pose: &Pose, points: &[DVec2], length: f64, width: f64) -> bool {
+        let r = DVec2::from_angle(-pose.yaw);
+        let mid = r.rotate(self.gap.mid - pose.xy());
+        let n = r.rotate(self.gap.normal);
+        points
+            .iter()
+            .filter(|q| {
+                let d = **q - mid;
+                (0.0..=length / 2.0 + 0.15).contains(&d.dot(n))
+                    && d.perp_dot(n).abs() <= width / 4.0
+            })
+            .count()
+            >= HITS_TO_BLOCK
     }
 
     /// Notes `seen` (world frame) when it is a gap off the followed side of the way being
@@ -710,6 +741,19 @@ impl Passage {
             && toward_normal.abs() < 0.2
         {
             self.phase = Phase::Pass;
+        }
+        // A gap found where a face behind it was hidden (seen edge-on from there: a crate
+        // beside the gap's far post closing the way) shows that face as the robot draws near.
+        // Driving on to the approach point would leave it in the pocket in front of the face,
+        // inside the follower's distance of everything round it: the gap is given up when the
+        // face comes into view. A face seen from the first step (a niche) is left to the pass,
+        // which tries it from in front and backs out.
+        if matches!(self.phase, Phase::Approach | Phase::Align) {
+            let face = self.face_across(pose, points, length, width);
+            if face && self.face_at_start == Some(false) {
+                return PassStep::Blocked;
+            }
+            self.face_at_start.get_or_insert(face);
         }
         let (v, omega) = match self.phase {
             Phase::Retreat if t <= -approach => return PassStep::Blocked,
@@ -1276,6 +1320,27 @@ mod tests {
         let pose = drive_through(&walls, Pose::default());
         assert!(pose.y > -1.0, "{pose:?}");
         assert!(wrap_angle(pose.yaw - FRAC_PI_2).abs() < 0.3, "{pose:?}");
+    }
+
+    #[test]
+    fn a_way_closed_just_past_the_gap_by_a_face_seen_edge_on_is_given_up_when_the_face_shows() {
+        // The doorway (1 m) is found from the start, where a crate's face behind it runs
+        // straight away from the sensor from the near post, (1, -1), to 0.2 m short of the
+        // way's far side (x = 2): seen edge-on, it hides, and the returns show a 1 m gap with
+        // the far side seen through it. The way past the gap's line narrows to 0.2 m. Coming
+        // up to the gap the face comes into view: the robot gives the gap up there, before
+        // its body reaches the gap's line (r16100-crates: it drove into a pocket between three
+        // crates and turned on the spot there until the Bug run backed out of it).
+        let mut walls = doorway(1.0);
+        walls.extend([
+            (DVec2::new(1.0, -1.0), DVec2::new(1.8, -1.8)),
+            (DVec2::new(1.8, -1.8), DVec2::new(1.8, -3.0)),
+            (DVec2::new(2.0, -1.0), DVec2::new(2.0, -3.0)),
+        ]);
+        let mut deepest = f64::INFINITY;
+        let (end, pose, _) = drive(&walls, Pose::default(), |_, p| deepest = deepest.min(p.y));
+        assert_eq!(end, PassStep::Blocked, "{pose:?}");
+        assert!(deepest > -1.0 + 0.508 / 2.0, "went {deepest} m in");
     }
 
     #[test]
