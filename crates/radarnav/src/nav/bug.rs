@@ -56,7 +56,10 @@
 //! * Bug1: a loop that closes on its own path rather than at the hit point (round a
 //!   neighbour the follower took up on the way) need not pass the way that led onto it
 //!   again: a closest point met on that way, which the loop does not come within the loop
-//!   tolerance of, is taken on the loop instead;
+//!   tolerance of, is taken on the loop instead; and where no point of that loop is nearer
+//!   the goal than the hit point (by half the loop tolerance), the neighbour lies back from
+//!   the goal: a `no_path` condition, since leaving from it would go back the way Bug1 came
+//!   and the hits need not get nearer;
 //! * a goal inside the standoff of an obstacle beyond it is approached slowly once the body's
 //!   corridor to it is free (the bumpers would trip first);
 //! * every `no_path` condition is first met with a **standoff retry**: the bumpers' safety
@@ -408,21 +411,27 @@ impl Boundary {
 
     /// Bug1, as the loop closes: `closest` if the loop meets it again (it was followed on the
     /// loop, or the loop passes within `tol` of it), else the loop's followed point nearest
-    /// `goal` (the loop closed on its own path, away from where `closest` was met).
+    /// `goal` (the loop closed on its own path, away from where `closest` was met), or `None`
+    /// when that point is not nearer the goal than the hit point by half of `tol`: the loop
+    /// went round a neighbour lying back from the goal, and leaving from it would go back the
+    /// way Bug1 came (each leave point must be nearer the goal than its hit point, or the
+    /// hits need not get nearer and the run need not end).
     fn closest_on_loop(
         &self,
         closest: (DVec2, f64, f64),
         goal: DVec2,
         tol: f64,
-    ) -> (DVec2, f64, f64) {
+    ) -> Option<(DVec2, f64, f64)> {
         let on_loop = || (self.trail.iter()).filter(|s| s.2 >= self.loop_from);
         if closest.2 >= self.loop_from || on_loop().any(|s| (s.0 - closest.0).length() <= tol) {
-            return closest;
+            return Some(closest);
         }
-        on_loop()
-            .map(|s| (s.0, (goal - s.0).length(), s.2))
+        match (on_loop().map(|s| (s.0, (goal - s.0).length(), s.2)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
-            .unwrap_or(closest)
+        {
+            Some(c) => (c.1 <= self.hit_goal_dist - tol / 2.0).then_some(c),
+            None => Some(closest),
+        }
     }
 
     /// Bug2, as the loop closes: the loop's followed point nearest the goal where the way
@@ -965,7 +974,13 @@ impl BugController {
                             // it) may not pass the way that led onto it again: a closest
                             // point met there, off the loop, is taken on the loop instead,
                             // which the robot stands at the start of.
-                            let on_loop = bd.closest_on_loop(bd.closest, goal, tol);
+                            let Some(on_loop) = bd.closest_on_loop(bd.closest, goal, tol) else {
+                                return self.no_path(
+                                    "bug1: round a neighbour without getting nearer the goal than the hit point",
+                                    p,
+                                    vehicle,
+                                );
+                            };
                             let tail = on_loop != bd.closest;
                             bd.closest = on_loop;
                             // Going on reaches the closest point after `closest.2`, going
@@ -1443,17 +1458,46 @@ mod tests {
         assert!(bd.loop_from > 6.6, "closed at {}", bd.loop_from);
         let tail = DVec2::new(4.0, 0.0);
         let on_tail = (tail, (goal - tail).length(), 4.0);
-        let (c, d, along) = bd.closest_on_loop(on_tail, goal, 0.75);
+        let (c, d, along) = bd.closest_on_loop(on_tail, goal, 0.75).expect("nearer");
         assert!(along >= bd.loop_from, "{along} before {}", bd.loop_from);
         assert!((c - DVec2::new(4.0, 3.0)).length() < 0.25, "{c}");
         assert!((d - (goal - c).length()).abs() < 1e-12);
         // A closest point on the loop stays.
         let on_loop = (DVec2::new(1.0, 4.0), 6.4, bd.loop_from + 5.0);
-        assert_eq!(bd.closest_on_loop(on_loop, goal, 0.75), on_loop);
+        assert_eq!(bd.closest_on_loop(on_loop, goal, 0.75), Some(on_loop));
         // So does one met on the way in that the loop passes within the tolerance of.
         let beside = DVec2::new(4.0, 2.6);
         let passed = (beside, (goal - beside).length(), 6.6);
-        assert_eq!(bd.closest_on_loop(passed, goal, 0.75), passed);
+        assert_eq!(bd.closest_on_loop(passed, goal, 0.75), Some(passed));
+    }
+
+    #[test]
+    fn a_loop_closed_round_a_neighbour_back_from_the_goal_leaves_nowhere() {
+        // The same way onto a neighbour and loop round it, with the goal west of the hit
+        // point: every point of the loop lies farther from the goal than the hit point.
+        // Leaving from the loop's nearest point would take Bug1 back the way it came.
+        let (hit, goal) = (DVec2::ZERO, DVec2::new(-6.0, -1.0));
+        let path = [
+            (hit, 0.0),
+            (DVec2::new(4.0, 0.0), FRAC_PI_2),
+            (DVec2::new(4.0, 3.0), PI),
+            (DVec2::new(1.0, 3.0), FRAC_PI_2),
+            (DVec2::new(1.0, 6.0), 0.0),
+            (DVec2::new(4.0, 6.0), -FRAC_PI_2),
+            (DVec2::new(4.0, 3.0), PI),
+            (DVec2::new(2.0, 3.0), PI),
+        ];
+        let mut bd = Boundary::at_hit(hit, (goal - hit).length());
+        first_loop(&mut bd, &path).expect("loop");
+        assert_eq!(bd.closest_on_loop(bd.closest, goal, 0.75), None);
+        // A goal the loop's west side comes nearer to than the hit point by half the
+        // tolerance: its nearest point there.
+        let goal = DVec2::new(1.0, 10.0);
+        let mut bd = Boundary::at_hit(hit, (goal - hit).length());
+        first_loop(&mut bd, &path).expect("loop");
+        let (c, d, _) = bd.closest_on_loop(bd.closest, goal, 0.75).expect("nearer");
+        assert!((c - DVec2::new(1.0, 6.0)).length() < 0.1, "{c}");
+        assert!(d < 4.1, "{d}");
     }
 
     #[test]
