@@ -1436,13 +1436,10 @@ mod tests {
         assert_eq!(c.bug_report().hit_points.len(), 1);
     }
 
-    #[test]
-    fn a_loop_closed_round_a_neighbour_has_its_closest_point_on_that_loop() {
-        // From the hit point east toward the goal's side, then north and round a 3 m square
-        // clockwise (a neighbour taken up) and on: the loop closes on its own path, not at
-        // the hit point, and leaves the way onto it (nearest the goal) behind.
-        let (hit, goal) = (DVec2::ZERO, DVec2::new(6.0, -1.0));
-        let path = [
+    /// From `hit` (the origin) 4 m east, then north and round a 3 m square clockwise (a
+    /// neighbour taken up) and on, with the headings followed.
+    fn onto_a_neighbour(hit: DVec2) -> [(DVec2, f64); 8] {
+        [
             (hit, 0.0),
             (DVec2::new(4.0, 0.0), FRAC_PI_2),
             (DVec2::new(4.0, 3.0), PI),
@@ -1451,7 +1448,16 @@ mod tests {
             (DVec2::new(4.0, 6.0), -FRAC_PI_2),
             (DVec2::new(4.0, 3.0), PI),
             (DVec2::new(2.0, 3.0), PI),
-        ];
+        ]
+    }
+
+    #[test]
+    fn a_loop_closed_round_a_neighbour_has_its_closest_point_on_that_loop() {
+        // From the hit point east toward the goal's side, then north and round a 3 m square
+        // clockwise (a neighbour taken up) and on: the loop closes on its own path, not at
+        // the hit point, and leaves the way onto it (nearest the goal) behind.
+        let (hit, goal) = (DVec2::ZERO, DVec2::new(6.0, -1.0));
+        let path = onto_a_neighbour(hit);
         let mut bd = boundary(hit);
         let at = first_loop(&mut bd, &path).expect("loop");
         assert!((at - DVec2::new(4.0, 3.0)).length() < 0.8, "{at}");
@@ -1477,16 +1483,7 @@ mod tests {
         // point: every point of the loop lies farther from the goal than the hit point.
         // Leaving from the loop's nearest point would take Bug1 back the way it came.
         let (hit, goal) = (DVec2::ZERO, DVec2::new(-6.0, -1.0));
-        let path = [
-            (hit, 0.0),
-            (DVec2::new(4.0, 0.0), FRAC_PI_2),
-            (DVec2::new(4.0, 3.0), PI),
-            (DVec2::new(1.0, 3.0), FRAC_PI_2),
-            (DVec2::new(1.0, 6.0), 0.0),
-            (DVec2::new(4.0, 6.0), -FRAC_PI_2),
-            (DVec2::new(4.0, 3.0), PI),
-            (DVec2::new(2.0, 3.0), PI),
-        ];
+        let path = onto_a_neighbour(hit);
         let mut bd = Boundary::at_hit(hit, (goal - hit).length());
         first_loop(&mut bd, &path).expect("loop");
         assert_eq!(bd.closest_on_loop(bd.closest, goal, 0.75), None);
