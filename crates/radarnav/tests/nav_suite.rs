@@ -400,6 +400,36 @@ fn a_radar_robot_does_not_squeeze_through_ways_narrower_than_its_turning_circle(
     );
 }
 
+#[test]
+fn a_radar_robot_backs_out_of_a_slot_it_cannot_turn_in() {
+    // A map drawn at random after the suites were tuned: the way to the goal runs through a
+    // slot between a crate and the room wall. The follower stood there with the crate 2 cm
+    // beside its body, no turn free, and only backed as far as it had just come forward in a
+    // straight line (a 270° laser is blind behind): not far enough. Stuck for 30 s, then
+    // stuck again at the smaller standoffs: `no_path` on every seed. The radar sees all
+    // round, so it backs as far as the way behind is seen free.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::{SensorClass, Trial};
+    let src = include_str!("maps/crates-slot.toml");
+    let scenario =
+        Scenario::from_toml(src, "tests/maps/crates-slot.toml", "crates-slot").expect("valid map");
+    let map = TrialMap::new(scenario).expect("a bug mission");
+    assert!(map.expectation(SensorClass::Radar).reachable);
+    let trial = Trial {
+        algorithm: BugAlgorithm::Bug2,
+        sensor: SensorClass::Radar,
+        pose: PoseSource::Truth,
+        seed: 1,
+    };
+    let r = map.run(&trial).expect("the run starts");
+    assert!(
+        r.passed(),
+        "{}",
+        failures(std::slice::from_ref(&r)).join("\n")
+    );
+}
+
 /// The built-in trial map `name`, ready for trials.
 fn trial_map(name: &str) -> TrialMap {
     TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("a bug mission")

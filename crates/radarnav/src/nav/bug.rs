@@ -90,7 +90,8 @@
 //!   away from what it would sweep, else (a way narrower than the turning circle) drives on
 //!   along it up to 3 m to where it is clear, or back as far, but no farther than it had
 //!   just come forward along that line ([`Trail::straight_behind`], counted afresh each step,
-//!   so backing along the way in keeps its room: behind, a 270° laser is blind). A turn
+//!   so backing along the way in keeps its room: behind, a 270° laser is blind); a sensor
+//!   that sees all round (the radar) backs the whole 3 m where it sees the way free. A turn
 //!   that bumped, or that the guard stopped, is taken for one whose circle holds a return,
 //!   whatever the returns in the circle say: the same moves, not a fixed 0.15 m back-off
 //!   (backing off so with the body turned part of the way off a narrow way's line, again
@@ -727,8 +728,8 @@ impl Behaviour for BugController {
             && let Some(b) = self.bumpers.update(input)
         {
             let v = input.vehicle;
-            // Backing far is blind (a 270° laser sees nothing behind, remembered returns
-            // drift): only as far as the robot had just come forward that way.
+            // Backing far is blind for a 270° laser (it sees nothing behind, remembered
+            // returns drift): only as far as the robot had just come forward that way.
             self.behind = self
                 .trail
                 .straight_behind(&nav_pose(self.mission.pose, input));
@@ -751,7 +752,15 @@ impl Behaviour for BugController {
                     .or_else(|| room(2.0 * BACK_OFF, -1.0))
                     .or(back_off.then_some(-BACK_SPEED))
                     .or_else(|| room(ESCAPE_MAX, 1.0))
-                    .or_else(|| room(ESCAPE_MAX.min(behind + *moved), -1.0));
+                    .or_else(|| {
+                        // A sensor that sees all round sees the way behind as well as ahead.
+                        let back = if b.sees_all_round() {
+                            ESCAPE_MAX
+                        } else {
+                            ESCAPE_MAX.min(behind + *moved)
+                        };
+                        room(back, -1.0)
+                    });
                 if let Some(speed) = speed {
                     d = Decision::Drive(DriveCommand::twist(speed, 0.0));
                     self.turned = false;

@@ -194,6 +194,9 @@ pub struct Bumpers {
     origin: DVec2,
     /// The sensor's range noise (none unless [`BumperSensor`] knows the sensor).
     noise: RangeNoise,
+    /// Whether the scan covers the whole circle: nothing round the robot is hidden from it
+    /// (a radar), unlike the back of a 270° laser.
+    all_round: bool,
 }
 
 impl Bumpers {
@@ -256,7 +259,14 @@ impl Bumpers {
             points,
             origin: DVec2::new(mount.x, mount.y),
             noise: RangeNoise::default(),
+            all_round: scan.angle_increment * scan.azimuths as f64 >= TAU - 1e-9,
         }
+    }
+
+    /// Whether the scan covers the whole circle round its sensor: what lies behind the robot
+    /// is seen now, not remembered.
+    pub fn sees_all_round(&self) -> bool {
+        self.all_round
     }
 
     /// Whether no return lies in the corridor of half-width `half_width` from the robot's
@@ -897,6 +907,17 @@ pub(crate) mod tests {
             BumperRule::Fraction(0.9),
         );
         assert_eq!(strict.state(1), BumperState::Clear);
+    }
+
+    #[test]
+    fn a_full_circle_scan_sees_all_round_and_a_270_degree_one_does_not() {
+        let sense = |s: &Scan| Bumpers::sense(s, &Pose::default(), 8, 0.76, 0.5, BumperRule::All);
+        assert!(sense(&ring_scan(360, |_| f32::INFINITY)).sees_all_round());
+        assert!(!sense(&laser_scan(1081, |_| f32::INFINITY)).sees_all_round());
+        // One ray short of the circle leaves a gap behind.
+        let mut s = ring_scan(360, |_| f32::INFINITY);
+        s.angle_increment *= 359.0 / 360.0;
+        assert!(!sense(&s).sees_all_round());
     }
 
     #[test]
