@@ -259,7 +259,7 @@ impl Bumpers {
             points,
             origin: DVec2::new(mount.x, mount.y),
             noise: RangeNoise::default(),
-            all_round: scan.angle_increment * scan.azimuths as f64 >= TAU - 1e-9,
+            all_round: scan.full_circle(),
         }
     }
 
@@ -524,11 +524,11 @@ impl BumperSensor {
     /// Adds the remembered returns the sensor is blind to now to `b`'s clearance, then
     /// remembers `b`'s own near returns in their place.
     fn remember(&mut self, b: &mut Bumpers, scan: &Scan, mount: &Pose, pose: &Pose, now: f64) {
-        let span = scan.angle_increment * scan.azimuths as f64;
-        if span >= TAU - 1e-9 {
+        if scan.full_circle() {
             // Seeing all round: nothing is hidden from the sensor for long.
             return;
         }
+        let span = scan.angle_increment * scan.azimuths as f64;
         let centre = mount.yaw + scan.angle_min + 0.5 * (span - scan.angle_increment);
         let blind = |q: DVec2| {
             let d = q - b.origin;

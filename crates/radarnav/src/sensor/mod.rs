@@ -146,6 +146,12 @@ impl Scan {
         (self.azimuth(az), self.elevations[plane])
     }
 
+    /// Whether each plane's rays cover the whole circle round the sensor (a scanning radar),
+    /// so that nothing round it is hidden, unlike the back of a 270° laser.
+    pub fn full_circle(&self) -> bool {
+        self.angle_increment * self.azimuths as f64 >= std::f64::consts::TAU - 1e-9
+    }
+
     /// Azimuth of the `k`-th ray of each plane in the sensor frame, rad.
     pub fn azimuth(&self, k: usize) -> f64 {
         self.angle_min + k as f64 * self.angle_increment
