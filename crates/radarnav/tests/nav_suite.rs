@@ -65,23 +65,7 @@ fn bug2_gets_through_a_room_of_crates() {
     // The crates' pockets and ways narrower than the turning circle: in this run a passage
     // turned on the spot toward an ever smaller heading error in a way that blocked the
     // body, until the no-progress watchdog ended it `no_path`.
-    use radarnav::map::PoseSource;
-    use radarnav::nav::BugAlgorithm;
-    use radarnav::trials::{SensorClass, Trial};
-    let map = trial_map("nav/clutter");
-    let trial = Trial {
-        algorithm: BugAlgorithm::Bug2,
-        sensor: SensorClass::Radar,
-        pose: PoseSource::Truth,
-        seed: 1,
-    };
-    let r = map.run(&trial).expect("the run starts");
-    assert!(
-        r.passed(),
-        "{}",
-        failures(std::slice::from_ref(&r)).join("\n")
-    );
-    assert_eq!(r.bumps, 0);
+    assert_bug2_radar_truth_passes(&trial_map("nav/clutter"));
 }
 
 #[test]
@@ -408,26 +392,13 @@ fn a_radar_robot_backs_out_of_a_slot_it_cannot_turn_in() {
     // straight line (a 270° laser is blind behind): not far enough. Stuck for 30 s, then
     // stuck again at the smaller standoffs: `no_path` on every seed. The radar sees all
     // round, so it backs as far as the way behind is seen free.
-    use radarnav::map::PoseSource;
-    use radarnav::nav::BugAlgorithm;
-    use radarnav::trials::{SensorClass, Trial};
     let src = include_str!("maps/crates-slot.toml");
     let scenario =
         Scenario::from_toml(src, "tests/maps/crates-slot.toml", "crates-slot").expect("valid map");
     let map = TrialMap::new(scenario).expect("a bug mission");
-    assert!(map.expectation(SensorClass::Radar).reachable);
-    let trial = Trial {
-        algorithm: BugAlgorithm::Bug2,
-        sensor: SensorClass::Radar,
-        pose: PoseSource::Truth,
-        seed: 1,
-    };
-    let r = map.run(&trial).expect("the run starts");
-    assert!(
-        r.passed(),
-        "{}",
-        failures(std::slice::from_ref(&r)).join("\n")
-    );
+    let radar = radarnav::trials::SensorClass::Radar;
+    assert!(map.expectation(radar).reachable);
+    assert_bug2_radar_truth_passes(&map);
 }
 
 /// The built-in trial map `name`, ready for trials.
@@ -467,9 +438,30 @@ fn laser_run(
     pose: radarnav::map::PoseSource,
     seed: u64,
 ) -> radarnav::trials::TrialResult {
+    let laser = radarnav::trials::SensorClass::Laser;
+    run_one(map, algorithm, laser, pose, seed)
+}
+
+/// Bug2 with the radar on the true pose, seed 1, passes on `map` without a bump.
+fn assert_bug2_radar_truth_passes(map: &TrialMap) {
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::SensorClass;
+    let (bug2, radar) = (BugAlgorithm::Bug2, SensorClass::Radar);
+    assert_clean(&[run_one(map, bug2, radar, PoseSource::Truth, 1)]);
+}
+
+/// One run of `sensor`'s Bug `algorithm` on `map`, believing `pose`, at `seed`.
+fn run_one(
+    map: &TrialMap,
+    algorithm: radarnav::nav::BugAlgorithm,
+    sensor: radarnav::trials::SensorClass,
+    pose: radarnav::map::PoseSource,
+    seed: u64,
+) -> radarnav::trials::TrialResult {
     let trial = radarnav::trials::Trial {
         algorithm,
-        sensor: radarnav::trials::SensorClass::Laser,
+        sensor,
         pose,
         seed,
     };
