@@ -401,6 +401,31 @@ fn a_radar_robot_backs_out_of_a_slot_it_cannot_turn_in() {
     assert_bug2_radar_truth_passes(&map);
 }
 
+#[test]
+fn bug1_goes_back_to_a_closest_point_met_on_the_way_onto_a_loop_round_a_neighbour() {
+    // A map drawn at random after the suites were tuned. Bug1 followed the wall it hit past
+    // the goal and on, then closed its loop on its own path round a neighbour that comes no
+    // nearer the goal than the hit point: no point of that loop to leave from, `no_path` on
+    // every seed. The closest point lies on the way onto the loop, and the path followed
+    // leads back to it.
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::SensorClass;
+    let src = include_str!("maps/walls-neighbour.toml");
+    let scenario = Scenario::from_toml(src, "tests/maps/walls-neighbour.toml", "walls-neighbour")
+        .expect("valid map");
+    let map = TrialMap::new(scenario).expect("a bug mission");
+    let radar = SensorClass::Radar;
+    assert!(map.expectation(radar).reachable);
+    assert_clean(&[run_one(
+        &map,
+        BugAlgorithm::Bug1,
+        radar,
+        PoseSource::Truth,
+        1,
+    )]);
+}
+
 /// The built-in trial map `name`, ready for trials.
 fn trial_map(name: &str) -> TrialMap {
     TrialMap::new(Scenario::builtin(name).expect("built-in")).expect("a bug mission")

@@ -349,6 +349,9 @@ struct Boundary {
     replay_pending: bool,
     /// Bug1: driving the followed path back to the closest point.
     replay: Option<Retrace>,
+    /// Bug1: the loop closed round a neighbour no nearer the goal than the hit point, and
+    /// the closest point lies on the way onto it: it is reached going back only.
+    back_to_tail: bool,
 }
 
 impl Boundary {
@@ -377,6 +380,7 @@ impl Boundary {
             replay_back: false,
             replay_pending: false,
             replay: None,
+            back_to_tail: false,
         }
     }
 
@@ -384,10 +388,10 @@ impl Boundary {
     /// the closest point, as points to drive in turn: the loop run backwards from here when
     /// `back`, else the loop from its start (from the sample nearest `p` within the stretch
     /// followed since it closed, and `tol` more). Empty when the closest point lies before
-    /// the loop's start.
+    /// the loop's start, unless it is to be reached going back (`back_to_tail`).
     fn way_to_closest(&self, p: DVec2, back: bool, tol: f64) -> Vec<DVec2> {
         let c = self.closest.2;
-        if c < self.loop_from {
+        if c < self.loop_from && !self.back_to_tail {
             return Vec::new();
         }
         if back {
@@ -983,12 +987,23 @@ impl BugController {
                             // it) may not pass the way that led onto it again: a closest
                             // point met there, off the loop, is taken on the loop instead,
                             // which the robot stands at the start of.
-                            let Some(on_loop) = bd.closest_on_loop(bd.closest, goal, tol) else {
-                                return self.no_path(
-                                    "bug1: round a neighbour without getting nearer the goal than the hit point",
-                                    p,
-                                    vehicle,
-                                );
+                            // When that loop comes no nearer the goal than the hit point
+                            // but the way onto it did, the robot drives the path it followed
+                            // back to that point and leaves there: leaving nearer the goal
+                            // than the hit point is all Bug1's progress needs.
+                            let on_loop = match bd.closest_on_loop(bd.closest, goal, tol) {
+                                Some(c) => c,
+                                None if bd.closest.1 <= bd.hit_goal_dist - tol / 2.0 => {
+                                    bd.back_to_tail = true;
+                                    bd.closest
+                                }
+                                None => {
+                                    return self.no_path(
+                                        "bug1: round a neighbour without getting nearer the goal than the hit point",
+                                        p,
+                                        vehicle,
+                                    );
+                                }
                             };
                             let tail = on_loop != bd.closest;
                             bd.closest = on_loop;
@@ -1000,13 +1015,21 @@ impl BugController {
                             // before the loop, and the slack it gives the odometer and the
                             // half-loop limit kept runs that counting from the loop's
                             // start lost, measured on the trial and random maps.)
-                            let ahead = bd.closest.2 - if tail { bd.loop_from } else { 0.0 };
+                            let ahead = if bd.back_to_tail {
+                                f64::INFINITY
+                            } else {
+                                bd.closest.2 - if tail { bd.loop_from } else { 0.0 }
+                            };
                             let behind = bd.travelled - bd.closest.2;
                             bd.replay_back = behind < ahead;
                             bd.replay_pending = true;
                             bd.leave_at = bd.travelled + ahead.min(behind);
                             bd.loop_len = bd.travelled;
-                            let from = if tail { bd.loop_from } else { 0.0 };
+                            let from = if tail || bd.back_to_tail {
+                                bd.loop_from
+                            } else {
+                                0.0
+                            };
                             let ring: Vec<DVec2> = (bd.trail.iter())
                                 .filter(|s| s.2 >= from)
                                 .map(|s| s.0)
@@ -1028,8 +1051,12 @@ impl BugController {
                         if bd.replay_pending && !passing {
                             bd.replay_pending = false;
                             // On dead reckoning the path followed a loop ago is off by
-                            // the drift since: the follower finds the boundary again.
-                            if self.mission.pose != PoseSource::Odometry {
+                            // the drift since: the follower finds the boundary again,
+                            // unless the point lies on the way onto the loop. Going back,
+                            // a follower keeps the neighbour's boundary, from which that
+                            // way branched off; the path replayed is off by the drift, and
+                            // the bumpers and the guard keep the robot off what is there.
+                            if self.mission.pose != PoseSource::Odometry || bd.back_to_tail {
                                 let way = bd.way_to_closest(p, bd.replay_back, tol);
                                 bd.replay = Retrace::replay(way, self.mission.speed, input.time);
                             }
@@ -1504,6 +1531,33 @@ mod tests {
         let (c, d, _) = bd.closest_on_loop(bd.closest, goal, 0.75).expect("nearer");
         assert!((c - DVec2::new(1.0, 6.0)).length() < 0.1, "{c}");
         assert!(d < 4.1, "{d}");
+    }
+
+    #[test]
+    fn a_closest_point_on_the_way_onto_a_loop_round_a_neighbour_is_reached_going_back() {
+        // The way onto the neighbour passes nearest the goal (4, 0); the loop round the
+        // neighbour comes no nearer than the hit point. The way back to that point runs
+        // back round the loop and down the way onto it.
+        let (hit, goal) = (DVec2::ZERO, DVec2::new(6.0, -4.0));
+        let path = onto_a_neighbour(hit);
+        let mut bd = Boundary::at_hit(hit, (goal - hit).length());
+        let end = first_loop(&mut bd, &path).expect("loop");
+        let tail = DVec2::new(4.0, 0.0);
+        bd.closest = (tail, (goal - tail).length(), 4.0);
+        assert_eq!(bd.closest_on_loop(bd.closest, goal, 0.75), None);
+        assert!(bd.closest.1 < bd.hit_goal_dist - 0.75 / 2.0);
+        // Only the loop is driven back to a point on it: none off it.
+        assert!(bd.way_to_closest(end, true, 0.75).is_empty());
+        bd.back_to_tail = true;
+        let way = bd.way_to_closest(end, true, 0.75);
+        assert!((way[0] - end).length() < 0.25, "{}", way[0]);
+        let last = *way.last().expect("a way");
+        assert!((last - tail).length() < 0.25, "{last}");
+        // It passes the loop's far side on the way.
+        assert!(
+            way.iter()
+                .any(|q| (*q - DVec2::new(1.0, 6.0)).length() < 0.25)
+        );
     }
 
     #[test]

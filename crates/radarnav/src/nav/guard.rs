@@ -7,7 +7,8 @@
 //! goal past a crate's corner clips it with a front corner while the goal's sector is clear.
 //! So every command is swept along its arc for `HORIZON` seconds against the returns
 //! ([`super::Bumpers::clearance`]); one that would bring the body to touch them is replaced
-//! by its straight part, or by its turn on the spot, whichever is free, or else the robot
+//! by its straight part, or by its turn on the spot, whichever is free of all returns but
+//! one (the command itself may pass two, which may be range noise), or else the robot
 //! stops and the behaviour is told it bumped, as a real bumper would have told it a moment
 //! later.
 
@@ -26,6 +27,9 @@ const MARGIN: f64 = 0.01;
 const NEARER: f64 = 1e-3;
 /// Largest move and turn between two checked poses of a sweep, m and rad.
 const SWEEP_STEP: (f64, f64) = (0.01, 0.02);
+/// A part of a command that touches must come no nearer than [`MARGIN`] to this many returns
+/// (one fewer than [`HITS_TO_BLOCK`]: only a single stray return is let pass).
+const PART_HITS: usize = HITS_TO_BLOCK - 1;
 /// Turns on the spot slower than this are no way out of a blocked arc, rad/s.
 const MIN_TURN: f64 = 0.2;
 
@@ -55,29 +59,36 @@ fn body_distance(q: DVec2, length: f64, width: f64) -> f64 {
 }
 
 /// The body's clearance among `points` (robot frame) at `pose`: the distance of the
-/// [`HITS_TO_BLOCK`]-th nearest of them to a body of `length` × `width` m there (one or two
-/// may be range noise), m; negative when that many lie inside it ([`body_distance`]).
-fn clearance(points: &[DVec2], pose: &Pose, length: f64, width: f64) -> f64 {
+/// `hits`-th nearest of them (1 to [`HITS_TO_BLOCK`]) to a body of `length` × `width` m
+/// there, m; negative when that many lie inside it ([`body_distance`]).
+fn clearance(points: &[DVec2], pose: &Pose, length: f64, width: f64, hits: usize) -> f64 {
     let to_body = pose.inverse();
     let mut nearest = [f64::INFINITY; HITS_TO_BLOCK];
+    let last = hits.clamp(1, HITS_TO_BLOCK) - 1;
     for q in points {
         let d = body_distance(
             to_body.compose(&Pose::new(q.x, q.y, 0.0, 0.0)).xy(),
             length,
             width,
         );
-        if d < nearest[HITS_TO_BLOCK - 1] {
-            nearest[HITS_TO_BLOCK - 1] = d;
-            nearest.sort_by(f64::total_cmp);
+        if d < nearest[last] {
+            nearest[last] = d;
+            nearest[..=last].sort_by(f64::total_cmp);
         }
     }
-    nearest[HITS_TO_BLOCK - 1]
+    nearest[last]
 }
 
 /// Whether a body of `length` × `width` m driven by `t` for `HORIZON` seconds comes nearer
-/// the robot-frame returns `points` than `MARGIN` (its `clearance`), or, already that
+/// the robot-frame returns `points` than `MARGIN` (its `clearance` by the
+/// [`HITS_TO_BLOCK`]-th nearest return: one or two may be range noise), or, already that
 /// near, nearer than it is now: a robot beside a wall may drive along it, not turn into it.
 pub fn sweep_touches(points: &[DVec2], length: f64, width: f64, t: Twist) -> bool {
+    sweep_touches_by(points, length, width, t, HITS_TO_BLOCK)
+}
+
+/// [`sweep_touches`] with the clearance taken at the `hits`-th nearest return.
+fn sweep_touches_by(points: &[DVec2], length: f64, width: f64, t: Twist, hits: usize) -> bool {
     if t.v == 0.0 && t.omega == 0.0 {
         return false;
     }
@@ -87,23 +98,30 @@ pub fn sweep_touches(points: &[DVec2], length: f64, width: f64, t: Twist) -> boo
         .copied()
         .filter(|q| q.length() <= reach)
         .collect();
-    let floor = MARGIN.min(clearance(&near, &Pose::default(), length, width) - NEARER);
+    let floor = MARGIN.min(clearance(&near, &Pose::default(), length, width, hits) - NEARER);
     let n = ((t.v.abs() * HORIZON / SWEEP_STEP.0).max(t.omega.abs() * HORIZON / SWEEP_STEP.1))
         .ceil()
         .max(1.0) as usize;
     (1..=n).any(|k| {
         let pose = integrate(&Pose::default(), t, HORIZON * k as f64 / n as f64);
-        clearance(&near, &pose, length, width) < floor
+        clearance(&near, &pose, length, width, hits) < floor
     })
 }
 
 /// Checks the (limited) command `t` of a robot `vehicle` among the robot-frame returns
 /// `points`: free, or a free part of it (straight on, or the turn on the spot), or stop.
+///
+/// A part must be free of all returns but one (a stray), not of all but two: it is a move
+/// the behaviour did not choose, made where its own already touches. Counting past two
+/// returns, the straight part of an arc turning into a wall's end was free while the end's
+/// corner lay in its way, seen by the two returns nearest it (the rest of the end face falls
+/// away from the body's side), and the robot bumped.
 pub fn guard(points: &[DVec2], vehicle: &VehicleSpec, t: Twist) -> Guarded {
-    let touches = |t: Twist| sweep_touches(points, vehicle.length, vehicle.width, t);
-    if !touches(t) {
+    let (length, width) = (vehicle.length, vehicle.width);
+    if !sweep_touches(points, length, width, t) {
         return Guarded::Free;
     }
+    let touches = |t: Twist| sweep_touches_by(points, length, width, t, PART_HITS);
     let straight = Twist { omega: 0.0, ..t };
     let turn = Twist { v: 0.0, ..t };
     if t.v != 0.0 && t.omega != 0.0 && !touches(straight) {
@@ -204,6 +222,40 @@ mod tests {
         assert!(!sweep_touches(&wall, L, W, twist(0.0, 0.8)));
         assert!(!sweep_touches(&wall, L, W, twist(-0.2, 0.0)));
         assert!(!sweep_touches(&wall, L, W, twist(0.2, 0.0)));
+    }
+
+    #[test]
+    fn the_straight_part_of_an_arc_into_a_wall_end_is_no_way_past_its_corner() {
+        // A thin wall's end ahead on the right, as the radar saw it in a random map where the
+        // robot bumped: its corner 1 mm inside the line of the body's right side, 3 cm ahead
+        // of the front face, its end face falling away back-left and its long face
+        // back-right, returns 9 mm apart on the end face (1° at 0.5 m) and 2.5 cm apart on
+        // the long face (seen at a grazing angle). Driving straight, only the two returns
+        // nearest the corner come within the margin of the body; the arc turning right into
+        // the wall touches by every count.
+        let v = crate::vehicle::vehicle("p3at").expect("p3at");
+        let (l, w) = (v.length, v.width);
+        let corner = DVec2::new(l / 2.0 + 0.03, -(w / 2.0 - 0.001));
+        let end_face = DVec2::new(-0.51, -0.86).normalize();
+        let long_face = DVec2::new(0.877, -0.481).normalize();
+        let wall: Vec<DVec2> = (0..30)
+            .flat_map(|k| {
+                let s = 0.009 * f64::from(k);
+                [
+                    corner + end_face * s,
+                    corner + long_face * 0.025 * f64::from(k + 1),
+                ]
+            })
+            .collect();
+        let (arc, straight) = (twist(0.4, -0.167), twist(0.4, 0.0));
+        assert!(sweep_touches(&wall, l, w, arc));
+        // By all but two returns, the straight part looks free...
+        assert!(!sweep_touches(&wall, l, w, straight));
+        // ...but the guard does not take it, nor any part: the robot stops.
+        assert_eq!(guard(&wall, v, arc), Guarded::Stop);
+        // With the wall's end 2 cm clear of the body's side, driving straight past it is free.
+        let clear: Vec<DVec2> = wall.iter().map(|q| *q - DVec2::new(0.0, 0.02)).collect();
+        assert_eq!(guard(&clear, v, straight), Guarded::Free);
     }
 
     #[test]
