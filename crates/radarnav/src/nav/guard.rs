@@ -81,7 +81,7 @@ fn clearance(points: &[DVec2], pose: &Pose, length: f64, width: f64, hits: usize
 
 /// Whether a body of `length` × `width` m driven by `t` for `HORIZON` seconds comes nearer
 /// the robot-frame returns `points` than `MARGIN` (its `clearance` by the
-/// [`HITS_TO_BLOCK`]-th nearest return: one or two may be range noise), or, already that
+/// `HITS_TO_BLOCK`-th nearest return: one or two may be range noise), or, already that
 /// near, nearer than it is now: a robot beside a wall may drive along it, not turn into it.
 pub fn sweep_touches(points: &[DVec2], length: f64, width: f64, t: Twist) -> bool {
     sweep_touches_by(points, length, width, t, HITS_TO_BLOCK)
