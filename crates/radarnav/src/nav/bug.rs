@@ -56,10 +56,22 @@
 //! * Bug1: a loop that closes on its own path rather than at the hit point (round a
 //!   neighbour the follower took up on the way) need not pass the way that led onto it
 //!   again: a closest point met on that way, which the loop does not come within the loop
-//!   tolerance of, is taken on the loop instead; and where no point of that loop is nearer
-//!   the goal than the hit point (by half the loop tolerance), the neighbour lies back from
-//!   the goal: a `no_path` condition, since leaving from it would go back the way Bug1 came
-//!   and the hits need not get nearer;
+//!   tolerance of, is taken on the loop instead. Where no point of that loop is nearer the
+//!   goal than the hit point (by half the loop tolerance), the neighbour lies back from the
+//!   goal and leaving from it would go back the way Bug1 came (the hits need not get
+//!   nearer): a closest point met on the way onto the loop, nearer by as much, is driven
+//!   back to along the path followed and left from; with none, a `no_path` condition;
+//! * Bug2: a loop closed on its own path round a neighbour with no nearer crossing and no
+//!   open point nearer the goal than the hit point (the goal not beyond it) says the
+//!   follower left the hit obstacle's boundary on the way (at a dead end, across a gap),
+//!   not that the goal is cut off. The first time at each standoff, Bug2 is **retried from
+//!   the hit point the other way round**: the robot drives the way onto the loop back to the
+//!   hit point ([`Retrace::replay`]) and starts again where that ends (its m-line from there,
+//!   on the old one), with the boundary kept on the other side, so it meets the hit
+//!   obstacle's other side first. The next time it is a `no_path` condition. (Bug1 keeps
+//!   its `no_path` condition above: tried there too, it gained no run on the sets measured,
+//!   lost two, and one replay that could not turn in a slot ended in a blind back-off and a
+//!   bump);
 //! * a goal inside the standoff of an obstacle beyond it is approached slowly once the body's
 //!   corridor to it is free (the bumpers would trip first);
 //! * every `no_path` condition is first met with a **standoff retry**: the bumpers' safety
@@ -68,7 +80,8 @@
 //!   At the floor it starts once more with the boundary kept on the **other side**: a real
 //!   follower passes gaps and closes loops differently going the other way round, while a
 //!   goal that cannot be reached is found so both ways. Only then is `no_path` reported.
-//!   The retries are in the report; the bumpers keep what they remember across them;
+//!   The retries (these and the ones from a hit point above) are in the report; the bumpers
+//!   keep what they remember across them;
 //! * a robot that has not got `STILL_RADIUS` from one place in `STILL_TIME` (turning on
 //!   the spot between sides nearer together than twice its standoff, or bumping to and fro in
 //!   a corner) first **retraces** the way it came until `RETRACE` metres from there and
@@ -384,6 +397,19 @@ impl Boundary {
         }
     }
 
+    /// The way onto a loop closed on its own path (round a neighbour), run backwards from
+    /// where the loop closed to the hit point; empty for a loop closed at the hit point.
+    fn way_back_to_hit(&self) -> Vec<DVec2> {
+        if self.loop_from <= 0.0 {
+            return Vec::new();
+        }
+        (self.trail.iter().rev())
+            .filter(|s| s.2 <= self.loop_from)
+            .map(|s| s.0)
+            .chain(std::iter::once(self.hit))
+            .collect()
+    }
+
     /// Bug1, once circled: the followed path from where the robot at `p` stands on it to
     /// the closest point, as points to drive in turn: the loop run backwards from here when
     /// `back`, else the loop from its start (from the sample nearest `p` within the stretch
@@ -561,6 +587,11 @@ pub struct BugController {
     behind: f64,
     /// Whether the retry with the boundary on the other side was made.
     side_retried: bool,
+    /// Whether the retry from a hit point the other way round was made at this standoff.
+    other_way_tried: bool,
+    /// Driving back to a hit point for that retry: the Bug starts again (its m-line too)
+    /// where the drive ends.
+    restart: bool,
     /// The last metres driven (believed), for leaving a dead end.
     trail: Trail,
     /// Driving the trail back out of a dead end.
@@ -596,6 +627,8 @@ impl BugController {
             shifted: (0.0, None),
             behind: 0.0,
             side_retried: false,
+            other_way_tried: false,
+            restart: false,
             trail: Trail::default(),
             retrace: None,
             dead_ends: Vec::new(),
@@ -673,9 +706,49 @@ impl BugController {
         self.bumpers.set_safety(next);
         self.dead_ends.clear();
         self.retrace = None;
+        self.other_way_tried = false;
+        self.restart = false;
         self.sighted = false;
         self.mode = Mode::ToGoal;
         self.start = Some(p);
+        self.last_leave = None;
+        Decision::Drive(DriveCommand::STOP)
+    }
+
+    /// Bug2: a loop closed round a neighbour at `p` with nothing on it to leave from
+    /// (`reason`): the follower left the hit obstacle's boundary on the way (at a dead end,
+    /// across a gap), which says nothing of the goal. Once at each standoff the Bug is
+    /// retried from the hit point with the boundary kept on the other side: the robot drives
+    /// `way` (the way onto the loop, back to the hit point) and starts again where that
+    /// ends, meeting the hit obstacle's other side first. Otherwise (or with no way back
+    /// known) a `no_path` condition.
+    fn other_way_retry(
+        &mut self,
+        reason: &str,
+        p: DVec2,
+        way: Vec<DVec2>,
+        time: f64,
+        vehicle: &VehicleSpec,
+    ) -> Decision {
+        if self.other_way_tried {
+            return self.no_path(reason, p, vehicle);
+        }
+        let Some(replay) = Retrace::replay(way, self.mission.speed, time) else {
+            return self.no_path(reason, p, vehicle);
+        };
+        self.other_way_tried = true;
+        self.mission.follow = self.mission.follow.other();
+        let safety = self.bumpers.config().safety_for(vehicle);
+        self.report.retries.push(RetryReport {
+            at: p.to_array(),
+            after: format!("{reason}: back to the hit point, the other way round"),
+            safety,
+            follow: self.mission.follow.as_str(),
+        });
+        self.retrace = Some(replay);
+        self.restart = true;
+        self.sighted = false;
+        self.mode = Mode::ToGoal;
         self.last_leave = None;
         Decision::Drive(DriveCommand::STOP)
     }
@@ -871,6 +944,9 @@ impl BugController {
                     self.retrace = None;
                     self.still = None;
                     self.follower.engage();
+                    if std::mem::take(&mut self.restart) {
+                        self.start = Some(p);
+                    }
                 }
             }
         } else {
@@ -1259,6 +1335,16 @@ impl BugController {
                                     bd.loop_len = bd.travelled - bd.loop_from;
                                     bd.leave_at = bd.travelled + (c.2 - bd.loop_from);
                                 }
+                                _ if !beyond => {
+                                    let way = bd.way_back_to_hit();
+                                    return self.other_way_retry(
+                                        "bug2: round a neighbour without a closer m-line crossing",
+                                        p,
+                                        way,
+                                        input.time,
+                                        vehicle,
+                                    );
+                                }
                                 _ => {
                                     return self.no_path(
                                         "bug2: back at the hit point without a closer m-line crossing",
@@ -1558,6 +1644,41 @@ mod tests {
             way.iter()
                 .any(|q| (*q - DVec2::new(1.0, 6.0)).length() < 0.25)
         );
+    }
+
+    #[test]
+    fn the_way_back_from_a_loop_round_a_neighbour_to_the_hit_point_is_the_way_onto_it() {
+        // The way onto the neighbour runs 4 m east and 3 m north of the hit point; the loop
+        // round the neighbour closes where that way met it. The way back to the hit point is
+        // that way run backwards, not the loop.
+        let (hit, goal) = (DVec2::ZERO, DVec2::new(-6.0, -1.0));
+        let path = onto_a_neighbour(hit);
+        let mut bd = Boundary::at_hit(hit, (goal - hit).length());
+        let end = first_loop(&mut bd, &path).expect("loop");
+        let way = bd.way_back_to_hit();
+        assert!((way[0] - end).length() < 0.8, "{} from {end}", way[0]);
+        assert_eq!(way.last(), Some(&hit));
+        assert!(
+            way.iter()
+                .any(|q| (*q - DVec2::new(4.0, 0.0)).length() < 0.25)
+        );
+        assert!(
+            way.iter().all(|q| q.y <= 3.0 + 1e-9),
+            "no point off the way on"
+        );
+        // A loop closed at the hit point went round the hit obstacle itself: no way back.
+        let mut square = Boundary::at_hit(hit, 10.0);
+        let round = [
+            (hit, 0.0),
+            (DVec2::new(6.0, 0.0), FRAC_PI_2),
+            (DVec2::new(6.0, 6.0), PI),
+            (DVec2::new(0.0, 6.0), -FRAC_PI_2),
+            (DVec2::new(0.0, 0.0), 0.0),
+            (DVec2::new(2.0, 0.0), 0.0),
+        ];
+        first_loop(&mut square, &round).expect("loop");
+        assert_eq!(square.loop_from, 0.0);
+        assert!(square.way_back_to_hit().is_empty());
     }
 
     #[test]

@@ -16,7 +16,8 @@
 //!
 //! Runs last as long as the scenario says, or longer when the bounds need it: three times the
 //! first attempt's bound at cruise speed for it, for each standoff retry the bumpers allow and for
-//! the retry on the other side at the floor, plus a minute. A timeout means the robot was
+//! the retry on the other side at the floor, twice over (Bug2 may follow each with a retry
+//! from a hit point the other way round), plus a minute. A timeout means the robot was
 //! lost, not slow.
 
 pub mod geometry;
@@ -290,8 +291,8 @@ impl TrialMap {
             kind: MissionKind::Bug(bug.clone()),
         };
         // Time for a path as long as the bounds of the first attempt, of every standoff
-        // retry the bumpers allow and of the retry on the other side at the floor, at a
-        // third of the cruise speed. Among crates a robot that keeps its bounds averages
+        // retry the bumpers allow and of the retry on the other side at the floor, each with
+        // a retry from a hit point the other way round (Bug2), at a third of the cruise speed. Among crates a robot that keeps its bounds averages
         // less than half its cruise speed (ways passed at half of it, turns on the spot,
         // backing out of dead ends): 0.17 m/s over 252 m round `r15106-crates`.
         let mut attempts = 2.0;
@@ -300,6 +301,7 @@ impl TrialMap {
             attempts += 1.0;
             safety = next;
         }
+        attempts *= 2.0;
         let settings = RunSettings {
             seed: trial.seed,
             duration: self
@@ -417,7 +419,8 @@ pub struct TrialResult {
     pub distance: f64,
     /// The algorithm's bound, m: summed over the attempts when the standoff was retried.
     pub bound: f64,
-    /// Bug runs made: 1 plus the standoff retries and the retry on the other side.
+    /// Bug runs made: 1 plus the standoff retries, the retry on the other side and (Bug2)
+    /// the retries from a hit point the other way round.
     pub attempts: usize,
     /// Dead ends the robot got stuck in and drove back out of the way it came.
     pub dead_ends: usize,
