@@ -69,9 +69,9 @@
 //!   hit point ([`Retrace::replay`]) and starts again where that ends (its m-line from there,
 //!   on the old one), with the boundary kept on the other side, so it meets the hit
 //!   obstacle's other side first. The next time it is a `no_path` condition. (Bug1 keeps
-//!   its `no_path` condition above: tried there too, it gained no run on the sets measured,
-//!   lost two, and one replay that could not turn in a slot ended in a blind back-off and a
-//!   bump);
+//!   its `no_path` condition above: tried there too, on five sets it won two runs and lost
+//!   three, two of them one map where the replay could not turn in a slot and a blind
+//!   back-off bumped);
 //! * a goal inside the standoff of an obstacle beyond it is approached slowly once the body's
 //!   corridor to it is free (the bumpers would trip first);
 //! * every `no_path` condition is first met with a **standoff retry**: the bumpers' safety
@@ -1558,6 +1558,19 @@ mod tests {
         assert_eq!(c.bug_report().hit_points.len(), 1);
     }
 
+    /// From the hit point at the origin round a 6 m square anticlockwise and `on` metres
+    /// past it, with the headings followed.
+    fn round_a_square(on: f64) -> [(DVec2, f64); 6] {
+        [
+            (DVec2::ZERO, 0.0),
+            (DVec2::new(6.0, 0.0), FRAC_PI_2),
+            (DVec2::new(6.0, 6.0), PI),
+            (DVec2::new(0.0, 6.0), -FRAC_PI_2),
+            (DVec2::ZERO, 0.0),
+            (DVec2::new(on, 0.0), 0.0),
+        ]
+    }
+
     /// From `hit` (the origin) 4 m east, then north and round a 3 m square clockwise (a
     /// neighbour taken up) and on, with the headings followed.
     fn onto_a_neighbour(hit: DVec2) -> [(DVec2, f64); 8] {
@@ -1668,15 +1681,7 @@ mod tests {
         );
         // A loop closed at the hit point went round the hit obstacle itself: no way back.
         let mut square = Boundary::at_hit(hit, 10.0);
-        let round = [
-            (hit, 0.0),
-            (DVec2::new(6.0, 0.0), FRAC_PI_2),
-            (DVec2::new(6.0, 6.0), PI),
-            (DVec2::new(0.0, 6.0), -FRAC_PI_2),
-            (DVec2::new(0.0, 0.0), 0.0),
-            (DVec2::new(2.0, 0.0), 0.0),
-        ];
-        first_loop(&mut square, &round).expect("loop");
+        first_loop(&mut square, &round_a_square(2.0)).expect("loop");
         assert_eq!(square.loop_from, 0.0);
         assert!(square.way_back_to_hit().is_empty());
     }
@@ -1701,14 +1706,7 @@ mod tests {
     fn a_loop_back_to_the_hit_point_the_same_way_closes() {
         // Round a 6 m square from the hit point, anticlockwise, and on past it.
         let hit = DVec2::ZERO;
-        let path = [
-            (hit, 0.0),
-            (DVec2::new(6.0, 0.0), FRAC_PI_2),
-            (DVec2::new(6.0, 6.0), PI),
-            (DVec2::new(0.0, 6.0), -FRAC_PI_2),
-            (DVec2::new(0.0, 0.0), 0.0),
-            (DVec2::new(3.0, 0.0), 0.0),
-        ];
+        let path = round_a_square(3.0);
         let at = first_loop(&mut boundary(hit), &path).expect("loop");
         assert!(at.length() < 0.8, "{at}");
     }
