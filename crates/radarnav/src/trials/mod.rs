@@ -292,9 +292,10 @@ impl TrialMap {
         };
         // Time for a path as long as the bounds of the first attempt, of every standoff
         // retry the bumpers allow and of the retry on the other side at the floor, each with
-        // a retry from a hit point the other way round (Bug2), at a third of the cruise speed. Among crates a robot that keeps its bounds averages
-        // less than half its cruise speed (ways passed at half of it, turns on the spot,
-        // backing out of dead ends): 0.17 m/s over 252 m round `r15106-crates`.
+        // a retry from a hit point the other way round (Bug2), at a third of the cruise
+        // speed. Among crates a robot that keeps its bounds averages less than half its
+        // cruise speed (ways passed at half of it, turns on the spot, backing out of dead
+        // ends): 0.17 m/s over 252 m round `r15106-crates`.
         let mut attempts = 2.0;
         let mut safety = bug.bumpers.safety_for(self.robot.vehicle);
         while let Some(next) = retry_safety(safety, self.robot.vehicle) {
