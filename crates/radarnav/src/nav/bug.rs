@@ -696,21 +696,27 @@ impl BugController {
             }
             None => return self.end(Ending::NoPath, reason),
         };
-        self.report.retries.push(RetryReport {
-            at: p.to_array(),
-            after: reason.to_owned(),
-            safety: next,
-            follow: self.mission.follow.as_str(),
-        });
         self.report.safety = next;
         self.bumpers.set_safety(next);
         self.dead_ends.clear();
         self.retrace = None;
         self.other_way_tried = false;
         self.restart = false;
+        self.start = Some(p);
+        self.retry(p, reason.to_owned(), next)
+    }
+
+    /// Starts the Bug again toward the goal (a retry made at `at` after `after`, at the
+    /// safety distance `safety` and the side now kept, goes into the report).
+    fn retry(&mut self, at: DVec2, after: String, safety: f64) -> Decision {
+        self.report.retries.push(RetryReport {
+            at: at.to_array(),
+            after,
+            safety,
+            follow: self.mission.follow.as_str(),
+        });
         self.sighted = false;
         self.mode = Mode::ToGoal;
-        self.start = Some(p);
         self.last_leave = None;
         Decision::Drive(DriveCommand::STOP)
     }
@@ -738,19 +744,11 @@ impl BugController {
         };
         self.other_way_tried = true;
         self.mission.follow = self.mission.follow.other();
-        let safety = self.bumpers.config().safety_for(vehicle);
-        self.report.retries.push(RetryReport {
-            at: p.to_array(),
-            after: format!("{reason}: back to the hit point, the other way round"),
-            safety,
-            follow: self.mission.follow.as_str(),
-        });
         self.retrace = Some(replay);
         self.restart = true;
-        self.sighted = false;
-        self.mode = Mode::ToGoal;
-        self.last_leave = None;
-        Decision::Drive(DriveCommand::STOP)
+        let safety = self.bumpers.config().safety_for(vehicle);
+        let after = format!("{reason}: back to the hit point, the other way round");
+        self.retry(p, after, safety)
     }
 
     /// The signed distance of `p` to the m-line and whether its foot lies between start and
