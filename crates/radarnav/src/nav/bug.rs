@@ -51,6 +51,10 @@
 //!   the front sector (rule 1 then turns that obstacle onto the wall side; the follower's arc
 //!   toward the wall side would take up whatever lies there);
 //! * leaving needs the body's corridor toward the goal free, not only the goal's sector;
+//! * a way ahead narrower than the body's turning circle is a hit on the way to the goal
+//!   (its sides lie beside the body, outside the bumper toward the goal), and a move to
+//!   where a refused turn on the spot is clear never goes on through such a way: the body
+//!   would squeeze through where its disc cannot (the trials' geometry calls it closed);
 //! * Bug1: a hit before getting a follow radius nearer the goal than the leave point is the
 //!   same obstacle (a notch or a concave side), a `no_path` condition;
 //! * Bug1: a loop that closes on its own path rather than at the hit point (round a
@@ -118,7 +122,7 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::bumper::{BumperConfig, BumperSensor, BumperState};
-use super::passage::{BACK_SPEED, backing_eases_turn, room_to_turn, turn_clear};
+use super::passage::{BACK_SPEED, backing_eases_turn, narrows_ahead, room_to_turn, turn_clear};
 use super::retrace::{Retrace, RetraceStep, Trail};
 use super::wall_follow::{DEAD_END_RADIUS, Side, WallFollower};
 use super::{Behaviour, nav_pose};
@@ -156,8 +160,9 @@ const BACK_OFF: f64 = 0.15;
 /// past a corner beside it).
 const SHIFT_MAX: f64 = 0.5;
 /// With no short move clearing a turn on the spot (a way between two sides nearer together
-/// than the body's turning circle), the robot drives on along the way, or back, up to this
-/// far to where the turn is clear, m: standing still there is stuck for good.
+/// than the body's turning circle), the robot drives on along the way (not past a pair of
+/// sides nearer together than that circle), or back, up to this far to where the turn is
+/// clear, m: standing still there is stuck for good.
 const ESCAPE_MAX: f64 = 3.0;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
@@ -797,6 +802,7 @@ impl Behaviour for BugController {
         // move to where it is clear first, then turn: ahead, where the sensor sees, or else
         // back a little. (A retrace turns only where its sweep is free.)
         let replaying = matches!(&self.mode, Mode::Follow(bd) if bd.replay.is_some());
+        let radius = self.bumpers.follow_radius(input.vehicle);
         if self.turned
             && self.retrace.is_none()
             && !replaying
@@ -813,8 +819,15 @@ impl Behaviour for BugController {
             *moved += from.map_or(0.0, |f| (p - f).length());
             *from = Some(p);
             if refused || !turn_clear(b.clearance(), v.length, v.width) {
+                // Never on between two sides nearer together than the turning circle: what
+                // lies past them is no part of the way the robot came by (its body squeezes
+                // through where its disc does not), so it backs out instead.
+                let sigma = b.noise().sigma(radius);
                 let room = |max: f64, sign: f64| {
                     room_to_turn(b.clearance(), v.length, v.width, max - *moved, sign)
+                        .filter(|&s| {
+                            sign < 0.0 || !narrows_ahead(b.clearance(), v.length, v.width, sigma, s)
+                        })
                         .map(|_| sign * BACK_SPEED)
                 };
                 // No short move clears the turn: back off a little all the same where the way
@@ -975,7 +988,18 @@ impl BugController {
         }
         // Hit: the bumper toward the goal trips. Leaving needs more: the body's corridor
         // toward the goal free up to the band's far edge (or the goal).
-        let hit = bumped || b.toward(heading) != BumperState::Clear;
+        // A way ahead narrower than the turning circle is closed like a wall: the body would
+        // squeeze between its sides (the bumpers' sectors see them beside it, not ahead),
+        // to where it could not turn, as the passages' narrowing check says likewise.
+        let narrows = heading.abs() <= TURN_IN_PLACE
+            && narrows_ahead(
+                b.clearance(),
+                vehicle.length,
+                vehicle.width,
+                b.noise().sigma(radius),
+                vehicle.length / 2.0 + 0.15,
+            );
+        let hit = bumped || b.toward(heading) != BumperState::Clear || narrows;
         let goal_blocked = !b.corridor_free(heading, goal_dist.min(reach), half_width)
             || b.toward(heading) == BumperState::TooClose;
         let tol = self.mission.loop_tolerance;

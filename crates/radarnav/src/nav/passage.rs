@@ -319,6 +319,24 @@ fn narrowest_ahead(points: &[DVec2], length: f64, width: f64, reach: f64) -> f64
     best
 }
 
+/// Whether the way straight ahead of a body of `length` × `width` m narrows below the
+/// body's turning circle (twice its half-diagonal: the disc the trials' geometry lets
+/// through) where its centre passes within `reach` metres, among its robot-frame `points`,
+/// for returns with range noise `sigma` (m, one σ) across the way: a pair of returns may
+/// look [`NARROWING_PULL`] σ nearer together at each end before the way counts as that
+/// narrow. Past such a pair lies what the robot could not reach turning as it must, though
+/// its body would squeeze through driving straight.
+pub(crate) fn narrows_ahead(
+    points: &[DVec2],
+    length: f64,
+    width: f64,
+    sigma: f64,
+    reach: f64,
+) -> bool {
+    let pull = 2.0 * NARROWING_PULL * sigma;
+    narrowest_ahead(points, length, width, reach) + pull < length.hypot(width)
+}
+
 /// Points across a gap checked for being seen open (the pair's ends excluded).
 const GAP_SAMPLES: usize = 6;
 /// A return within this angle of a point hides it, rad (1°, a radar's ray spacing).
@@ -569,10 +587,8 @@ pub struct Passage {
     /// The last gap seen off the followed side of the way (world frame), see
     /// [`Passage::note_aside`].
     aside: Option<Gap>,
-    /// How much narrower than the body's turning circle the returns may put the way ahead
-    /// before it counts as closed: the range noise that pulls a pair across it, m (0 for a
-    /// noise-free sensor).
-    noise_pull: f64,
+    /// Range noise (one σ) of the returns across the way ahead ([`narrows_ahead`]), m.
+    sigma: f64,
     /// Whether a face stood across the way just past the gap when the passage began
     /// ([`Passage::face_across`]; `None` before its first step).
     face_at_start: Option<bool>,
@@ -611,17 +627,14 @@ impl Passage {
             backing: false,
             backing_out: false,
             aside: None,
-            noise_pull: 0.0,
+            sigma: 0.0,
             face_at_start: None,
         }
     }
 
     /// This passage for returns with range noise `sigma` (m, one σ) across the way ahead.
     pub fn with_noise(self, sigma: f64) -> Self {
-        Self {
-            noise_pull: 2.0 * NARROWING_PULL * sigma,
-            ..self
-        }
+        Self { sigma, ..self }
     }
 
     /// Whether the robot is committed to the passage: turning on the spot or leaving the
@@ -855,9 +868,8 @@ impl Passage {
         // way closed). Centred, the body would squeeze on between two obstacles a few
         // centimetres either side of it, to a goal beyond that only a narrower robot could
         // reach; there the way ends as at a wall ahead (turn about, or back out).
-        let turning = length.hypot(width);
         let narrowing = self.phase == Phase::Through
-            && narrowest_ahead(points, length, width, half.0 + 0.15) + self.noise_pull < turning;
+            && narrows_ahead(points, length, width, self.sigma, half.0 + 0.15);
         let ahead_clear = ahead_clear && !narrowing;
         if self.phase == Phase::Retreat {
             return if v == 0.0 || behind_clear {
@@ -1369,6 +1381,25 @@ mod tests {
             end == PassStep::Blocked || pose.y > -1.0,
             "{end:?} at {pose:?}"
         );
+    }
+
+    #[test]
+    fn a_way_ahead_narrower_than_the_turning_circle_narrows_only_within_the_reach() {
+        // A way starting 0.45 m ahead of the centre of the P3AT's body (0.508 × 0.497 m,
+        // turning circle 0.711 m): 0.69 m wide the body would pass, its disc not; 0.75 m
+        // wide both do. A reach short of the way's mouth does not see it narrow.
+        let (length, width) = (0.508, 0.497);
+        let way = |w: f64| {
+            scan(&[
+                (DVec2::new(0.45, w / 2.0), DVec2::new(1.5, w / 2.0)),
+                (DVec2::new(0.45, -w / 2.0), DVec2::new(1.5, -w / 2.0)),
+            ])
+        };
+        assert!(narrows_ahead(&way(0.69), length, width, 0.0, 0.6));
+        assert!(!narrows_ahead(&way(0.75), length, width, 0.0, 0.6));
+        assert!(!narrows_ahead(&way(0.69), length, width, 0.0, 0.4));
+        // Returns 1 cm noisy may put a way 5 cm (2 × 2.5 σ) narrower than it is.
+        assert!(!narrows_ahead(&way(0.69), length, width, 0.01, 0.6));
     }
 
     #[test]
