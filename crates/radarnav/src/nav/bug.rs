@@ -53,8 +53,9 @@
 //! * leaving needs the body's corridor toward the goal free, not only the goal's sector;
 //! * a way ahead narrower than the body's turning circle is a hit on the way to the goal
 //!   (its sides lie beside the body, outside the bumper toward the goal), and a move to
-//!   where a refused turn on the spot is clear never goes on through such a way: the body
-//!   would squeeze through where its disc cannot (the trials' geometry calls it closed);
+//!   where a refused turn on the spot is clear goes on through such a way only when backing
+//!   cannot clear the turn: the body would squeeze through where its disc cannot (the
+//!   trials' geometry calls it closed);
 //! * Bug1: a hit before getting a follow radius nearer the goal than the leave point is the
 //!   same obstacle (a notch or a concave side), a `no_path` condition;
 //! * Bug1: a loop that closes on its own path rather than at the hit point (round a
@@ -160,9 +161,9 @@ const BACK_OFF: f64 = 0.15;
 /// past a corner beside it).
 const SHIFT_MAX: f64 = 0.5;
 /// With no short move clearing a turn on the spot (a way between two sides nearer together
-/// than the body's turning circle), the robot drives on along the way (not past a pair of
-/// sides nearer together than that circle), or back, up to this far to where the turn is
-/// clear, m: standing still there is stuck for good.
+/// than the body's turning circle), the robot drives on along the way (past a pair of sides
+/// nearer together than that circle only when backing cannot clear it), or back, up to this
+/// far to where the turn is clear, m: standing still there is stuck for good.
 const ESCAPE_MAX: f64 = 3.0;
 /// Speed of the final approach to a goal inside the standoff distance, m/s.
 const APPROACH_SPEED: f64 = 0.2;
@@ -819,14 +820,18 @@ impl Behaviour for BugController {
             *moved += from.map_or(0.0, |f| (p - f).length());
             *from = Some(p);
             if refused || !turn_clear(b.clearance(), v.length, v.width) {
-                // Never on between two sides nearer together than the turning circle: what
-                // lies past them is no part of the way the robot came by (its body squeezes
-                // through where its disc does not), so it backs out instead.
+                // On between two sides nearer together than the turning circle only when
+                // backing cannot clear the turn either: what lies past them need be no part of
+                // the way the robot came by (its body squeezes through where its disc does
+                // not). A robot that has no way back (it stands in a dead end that narrow)
+                // drives on out all the same.
                 let sigma = b.noise().sigma(radius);
-                let room = |max: f64, sign: f64| {
+                let room = |max: f64, sign: f64, squeeze: bool| {
                     room_to_turn(b.clearance(), v.length, v.width, max - *moved, sign)
                         .filter(|&s| {
-                            sign < 0.0 || !narrows_ahead(b.clearance(), v.length, v.width, sigma, s)
+                            sign < 0.0
+                                || squeeze
+                                || !narrows_ahead(b.clearance(), v.length, v.width, sigma, s)
                         })
                         .map(|_| sign * BACK_SPEED)
                 };
@@ -836,10 +841,10 @@ impl Behaviour for BugController {
                 let back_off = *moved < 2.0 * BACK_OFF
                     && behind_free(b, v, BACK_OFF)
                     && backing_eases_turn(b.clearance(), v.length, v.width);
-                let speed = room(SHIFT_MAX, 1.0)
-                    .or_else(|| room(2.0 * BACK_OFF, -1.0))
+                let speed = room(SHIFT_MAX, 1.0, false)
+                    .or_else(|| room(2.0 * BACK_OFF, -1.0, false))
                     .or(back_off.then_some(-BACK_SPEED))
-                    .or_else(|| room(ESCAPE_MAX, 1.0))
+                    .or_else(|| room(ESCAPE_MAX, 1.0, false))
                     .or_else(|| {
                         // A sensor that sees all round sees the way behind as well as ahead.
                         let back = if b.sees_all_round() {
@@ -847,8 +852,9 @@ impl Behaviour for BugController {
                         } else {
                             ESCAPE_MAX.min(behind + *moved)
                         };
-                        room(back, -1.0)
-                    });
+                        room(back, -1.0, false)
+                    })
+                    .or_else(|| room(ESCAPE_MAX, 1.0, true));
                 if let Some(speed) = speed {
                     d = Decision::Drive(DriveCommand::twist(speed, 0.0));
                     self.turned = false;
