@@ -247,7 +247,8 @@ impl WallFollower {
                     if fresh && !dead_end {
                         g.passage = Some(
                             Passage::new(seen, 2.0 * radius, self.speed)
-                                .with_noise(b.noise().sigma(radius)),
+                                .with_noise(b.noise().sigma(radius))
+                                .keeping(side),
                         );
                     }
                 }
@@ -258,8 +259,9 @@ impl WallFollower {
         let mut step = passage.step(pose, b.clearance(), g.length, g.width, dt);
         if let PassStep::Aside(aside) = step {
             g.done = Some((passage.gap().mid, g.travelled));
-            *passage =
-                Passage::new(aside, 2.0 * radius, self.speed).with_noise(b.noise().sigma(radius));
+            *passage = Passage::new(aside, 2.0 * radius, self.speed)
+                .with_noise(b.noise().sigma(radius))
+                .keeping(side);
             step = passage.step(pose, b.clearance(), g.length, g.width, dt);
         }
         match step {
