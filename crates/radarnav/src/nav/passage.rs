@@ -1462,6 +1462,21 @@ mod tests {
         assert!(!narrows_ahead(&way(0.69), length, width, 0.01, 0.6));
     }
 
+    /// Behind the doorway of [`doorway`] (1 m wide), a way as wide going down 3 m, where it
+    /// ends and turns off, 1 m wide, to the left when `arm` > 0 (facing down it), else to the
+    /// right.
+    fn l_way(arm: f64) -> Vec<(DVec2, DVec2)> {
+        let (near, far) = if arm > 0.0 { (2.0, 1.0) } else { (1.0, 2.0) };
+        let mut walls = doorway(1.0);
+        walls.extend([
+            (DVec2::new(far, -1.0), DVec2::new(far, -4.0)),
+            (DVec2::new(near, -1.0), DVec2::new(near, -3.0)),
+            (DVec2::new(far, -4.0), DVec2::new(near + 4.0 * arm, -4.0)),
+            (DVec2::new(near, -3.0), DVec2::new(near + 4.0 * arm, -3.0)),
+        ]);
+        walls
+    }
+
     #[test]
     fn a_way_that_turns_off_at_its_end_is_handed_back_not_turned_about_in() {
         // The way behind the doorway (1 m wide) ends 3 m in, where it turns off, 1 m wide,
@@ -1469,14 +1484,7 @@ mod tests {
         // down the way, for the follower to take the corner (a turn about would shut the way
         // off: an L between a hedge's end and a room wall, r3111-light).
         for arm in [1.0, -1.0] {
-            let (near, far) = if arm > 0.0 { (2.0, 1.0) } else { (1.0, 2.0) };
-            let mut walls = doorway(1.0);
-            walls.extend([
-                (DVec2::new(far, -1.0), DVec2::new(far, -4.0)),
-                (DVec2::new(near, -1.0), DVec2::new(near, -3.0)),
-                (DVec2::new(far, -4.0), DVec2::new(near + 4.0 * arm, -4.0)),
-                (DVec2::new(near, -3.0), DVec2::new(near + 4.0 * arm, -3.0)),
-            ]);
+            let walls = l_way(arm);
             let pose = drive_through(&walls, Pose::default());
             assert!(pose.y < -2.9, "arm {arm}: {pose:?}");
             assert!(
@@ -1496,14 +1504,7 @@ mod tests {
         // into the arm before handing back; an arm to the left is left to the follower, as
         // is either arm for a passage that does not know the followed side.
         for arm in [1.0, -1.0] {
-            let (near, far) = if arm > 0.0 { (2.0, 1.0) } else { (1.0, 2.0) };
-            let mut walls = doorway(1.0);
-            walls.extend([
-                (DVec2::new(far, -1.0), DVec2::new(far, -4.0)),
-                (DVec2::new(near, -1.0), DVec2::new(near, -3.0)),
-                (DVec2::new(far, -4.0), DVec2::new(near + 4.0 * arm, -4.0)),
-                (DVec2::new(near, -3.0), DVec2::new(near + 4.0 * arm, -3.0)),
-            ]);
+            let walls = l_way(arm);
             let start = Pose::default();
             let g = gap(&scan(&local(&walls, &start)), -1.0, 0.71..3.0).expect("gap");
             let pass = Passage::new(g.in_frame(&start), 3.0, 0.4).keeping(-1.0);
