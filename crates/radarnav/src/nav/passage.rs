@@ -26,10 +26,6 @@
 //! the turning circle ends there likewise, though the body would pass), and hands back to the
 //! follower where the way widens, or where it ends ahead but turns off to one side (an L
 //! between a hedge's end and a room wall: the follower takes the corner, keeping its side).
-//! Where the way turns off toward the followed side (that side's boundary bends round into
-//! it, another obstacle stands ahead), the robot first turns on the spot to face into it:
-//! the follower's own rule for a face ahead turns away from the followed side and would take
-//! up the face's boundary instead.
 //! A dead end with no room to turn about is backed out of. Where the followed side opens on
 //! the way through a gap narrower than the way (a crate's end and its neighbour's corner),
 //! the followed boundary goes on through that opening, while the centred drive passes it
@@ -239,35 +235,25 @@ const TURN_OFF: (f64, f64) = (0.6, 1.9);
 const TURN_OFF_STEP: f64 = 0.05;
 
 /// Whether, among the robot-frame returns `points`, a body of `length` × `width` m that can
-/// turn on the spot has a way off to one side: [`way_off`] on either.
+/// turn on the spot has a way off to one side: a strip as wide as the body (with
+/// [`BODY_MARGIN`]) from its centre out past the front face plus a body length, at a
+/// bearing in [`TURN_OFF`], holding fewer than [`HITS_TO_BLOCK`] returns. The sides of a
+/// narrow dead end block every such strip; the open arm of an L does not.
 fn way_turns_off(points: &[DVec2], length: f64, width: f64) -> bool {
-    way_off(points, length, width, 1.0).is_some() || way_off(points, length, width, -1.0).is_some()
-}
-
-/// The bearing of a way off to the side `sign` (> 0 left) among the robot-frame returns
-/// `points` for a body of `length` × `width` m: of the bearings in [`TURN_OFF`] on that
-/// side at which a strip as wide as the body (with [`BODY_MARGIN`]) from its centre out past
-/// the front face plus a body length holds fewer than [`HITS_TO_BLOCK`] returns, the middle
-/// of the first run met turning from ahead (signed, rad). The sides of a narrow dead end
-/// block every such strip; the open arm of an L does not.
-fn way_off(points: &[DVec2], length: f64, width: f64, sign: f64) -> Option<f64> {
     let half = width / 2.0 + BODY_MARGIN;
     let reach = 1.5 * length + LOOK_AHEAD;
     let steps = ((TURN_OFF.1 - TURN_OFF.0) / TURN_OFF_STEP).round() as usize;
-    let open = |b: f64| {
-        let u = DVec2::from_angle(b);
-        points
-            .iter()
-            .filter(|q| (0.0..=reach).contains(&q.dot(u)) && u.perp_dot(**q).abs() <= half)
-            .count()
-            < HITS_TO_BLOCK
-    };
-    let bearings = (0..=steps).map(|k| sign.signum() * (TURN_OFF.0 + k as f64 * TURN_OFF_STEP));
-    let run: Vec<f64> = bearings
-        .skip_while(|&b| !open(b))
-        .take_while(|&b| open(b))
-        .collect();
-    Some((run.first()? + run.last()?) / 2.0)
+    (0..=steps)
+        .map(|k| TURN_OFF.0 + k as f64 * TURN_OFF_STEP)
+        .flat_map(|b| [b, -b])
+        .any(|b| {
+            let u = DVec2::from_angle(b);
+            points
+                .iter()
+                .filter(|q| (0.0..=reach).contains(&q.dot(u)) && u.perp_dot(**q).abs() <= half)
+                .count()
+                < HITS_TO_BLOCK
+        })
 }
 
 /// Steps in which [`room_to_turn`] tries moves, m.
@@ -606,10 +592,6 @@ pub struct Passage {
     /// Whether a face stood across the way just past the gap when the passage began
     /// ([`Passage::face_across`]; `None` before its first step).
     face_at_start: Option<bool>,
-    /// The followed side (+1 left, −1 right, 0 not known), see [`Passage::keeping`].
-    side: f64,
-    /// Turn still to make on the spot into a way off the followed side, rad (signed).
-    turn_off: f64,
 }
 
 /// What a passage step asks for.
@@ -647,24 +629,12 @@ impl Passage {
             aside: None,
             sigma: 0.0,
             face_at_start: None,
-            side: 0.0,
-            turn_off: 0.0,
         }
     }
 
     /// This passage for returns with range noise `sigma` (m, one σ) across the way ahead.
     pub fn with_noise(self, sigma: f64) -> Self {
         Self { sigma, ..self }
-    }
-
-    /// This passage for a follower keeping its wall on the side `sign` (+1 left, −1 right):
-    /// where the way beyond the gap ends ahead and turns off to that side, the robot turns
-    /// into it before handing back (see [`Passage::step`]).
-    pub fn keeping(self, sign: f64) -> Self {
-        Self {
-            side: sign.signum(),
-            ..self
-        }
     }
 
     /// Whether the robot is committed to the passage: turning on the spot or leaving the
@@ -910,23 +880,9 @@ impl Passage {
         }
         self.free_to_turn =
             self.phase == Phase::Through && self.through >= self.narrow && turn_clear;
-        // Turning into a way off the followed side (below): on until facing it, then the
-        // follower goes on along the followed boundary.
-        if self.turn_off != 0.0 {
-            let sign = self.turn_off.signum();
-            self.turn_off -= sign * PASS_TURN * dt;
-            if self.turn_off * sign <= 0.0 || !turn_clear {
-                self.turn_off = 0.0;
-                return PassStep::Done;
-            }
-            return PassStep::Drive(0.0, sign * PASS_TURN);
-        }
         // The way ends ahead but turns off beside it (an L between a hedge and a wall): no
         // dead end. The follower goes on round the corner, keeping its side; a turn about
-        // here would shut the way off. Where the way turns off toward the followed side (the
-        // followed boundary bends round into it, another obstacle stands ahead), the
-        // follower's own rule for a face ahead would turn away from that side and take up
-        // the obstacle ahead: the robot turns into the way first.
+        // here would shut the way off.
         if self.phase == Phase::Through
             && self.about <= 0.0
             && v > 0.0
@@ -934,13 +890,6 @@ impl Passage {
             && turn_clear
             && way_turns_off(points, length, width)
         {
-            if let Some(b) = (self.side != 0.0)
-                .then(|| way_off(points, length, width, self.side))
-                .flatten()
-            {
-                self.turn_off = b;
-                return PassStep::Drive(0.0, b.signum() * PASS_TURN);
-            }
             return PassStep::Done;
         }
         // A dead end between the sides: turn about on the spot and go back out between
@@ -990,7 +939,7 @@ impl Passage {
 
 #[cfg(test)]
 mod tests {
-    use std::f64::consts::{FRAC_PI_2, PI};
+    use std::f64::consts::FRAC_PI_2;
 
     use super::*;
 
@@ -1273,20 +1222,11 @@ mod tests {
         walls: &[(DVec2, DVec2)],
         start: Pose,
         gap: Gap,
-        watch: impl FnMut(&Passage, &Pose),
-    ) -> (PassStep, Pose, f64) {
-        drive_passage(walls, start, Passage::new(gap, 3.0, 0.4), watch)
-    }
-
-    /// [`drive_gap`] with the passage `pass`.
-    fn drive_passage(
-        walls: &[(DVec2, DVec2)],
-        start: Pose,
-        mut pass: Passage,
         mut watch: impl FnMut(&Passage, &Pose),
     ) -> (PassStep, Pose, f64) {
         let (length, width) = (0.508, 0.497);
         let mut pose = start;
+        let mut pass = Passage::new(gap, 3.0, 0.4);
         let dt = 0.05;
         let mut steps = 0;
         loop {
@@ -1462,21 +1402,6 @@ mod tests {
         assert!(!narrows_ahead(&way(0.69), length, width, 0.01, 0.6));
     }
 
-    /// Behind the doorway of [`doorway`] (1 m wide), a way as wide going down 3 m, where it
-    /// ends and turns off, 1 m wide, to the left when `arm` > 0 (facing down it), else to the
-    /// right.
-    fn l_way(arm: f64) -> Vec<(DVec2, DVec2)> {
-        let (near, far) = if arm > 0.0 { (2.0, 1.0) } else { (1.0, 2.0) };
-        let mut walls = doorway(1.0);
-        walls.extend([
-            (DVec2::new(far, -1.0), DVec2::new(far, -4.0)),
-            (DVec2::new(near, -1.0), DVec2::new(near, -3.0)),
-            (DVec2::new(far, -4.0), DVec2::new(near + 4.0 * arm, -4.0)),
-            (DVec2::new(near, -3.0), DVec2::new(near + 4.0 * arm, -3.0)),
-        ]);
-        walls
-    }
-
     #[test]
     fn a_way_that_turns_off_at_its_end_is_handed_back_not_turned_about_in() {
         // The way behind the doorway (1 m wide) ends 3 m in, where it turns off, 1 m wide,
@@ -1484,36 +1409,18 @@ mod tests {
         // down the way, for the follower to take the corner (a turn about would shut the way
         // off: an L between a hedge's end and a room wall, r3111-light).
         for arm in [1.0, -1.0] {
-            let walls = l_way(arm);
+            let (near, far) = if arm > 0.0 { (2.0, 1.0) } else { (1.0, 2.0) };
+            let mut walls = doorway(1.0);
+            walls.extend([
+                (DVec2::new(far, -1.0), DVec2::new(far, -4.0)),
+                (DVec2::new(near, -1.0), DVec2::new(near, -3.0)),
+                (DVec2::new(far, -4.0), DVec2::new(near + 4.0 * arm, -4.0)),
+                (DVec2::new(near, -3.0), DVec2::new(near + 4.0 * arm, -3.0)),
+            ]);
             let pose = drive_through(&walls, Pose::default());
             assert!(pose.y < -2.9, "arm {arm}: {pose:?}");
             assert!(
                 wrap_angle(pose.yaw + FRAC_PI_2).abs() < 0.5,
-                "arm {arm}: {pose:?}"
-            );
-        }
-    }
-
-    #[test]
-    fn a_way_that_turns_off_toward_the_followed_side_is_turned_into_before_handing_back() {
-        // As above, for a follower keeping the boundary on its right. Where the way turns off
-        // to the right, the followed side bends round into the arm with a face ahead: the
-        // follower's own rule for a face ahead turns away from the followed side and would
-        // take up that face's boundary instead (r17306-crates: a crate's end, another crate
-        // ahead, the way to the goal round the first). The robot turns on the spot to face
-        // into the arm before handing back; an arm to the left is left to the follower, as
-        // is either arm for a passage that does not know the followed side.
-        for arm in [1.0, -1.0] {
-            let walls = l_way(arm);
-            let start = Pose::default();
-            let g = gap(&scan(&local(&walls, &start)), -1.0, 0.71..3.0).expect("gap");
-            let pass = Passage::new(g.in_frame(&start), 3.0, 0.4).keeping(-1.0);
-            let (end, pose, _) = drive_passage(&walls, start, pass, |_, _| {});
-            assert_eq!(end, PassStep::Done, "arm {arm}: {pose:?}");
-            assert!(pose.y < -2.9, "arm {arm}: {pose:?}");
-            let facing = if arm < 0.0 { PI } else { -FRAC_PI_2 };
-            assert!(
-                wrap_angle(pose.yaw - facing).abs() < 0.5,
                 "arm {arm}: {pose:?}"
             );
         }

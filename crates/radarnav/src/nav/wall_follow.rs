@@ -247,8 +247,7 @@ impl WallFollower {
                     if fresh && !dead_end {
                         g.passage = Some(
                             Passage::new(seen, 2.0 * radius, self.speed)
-                                .with_noise(b.noise().sigma(radius))
-                                .keeping(side),
+                                .with_noise(b.noise().sigma(radius)),
                         );
                     }
                 }
@@ -259,9 +258,8 @@ impl WallFollower {
         let mut step = passage.step(pose, b.clearance(), g.length, g.width, dt);
         if let PassStep::Aside(aside) = step {
             g.done = Some((passage.gap().mid, g.travelled));
-            *passage = Passage::new(aside, 2.0 * radius, self.speed)
-                .with_noise(b.noise().sigma(radius))
-                .keeping(side);
+            *passage =
+                Passage::new(aside, 2.0 * radius, self.speed).with_noise(b.noise().sigma(radius));
             step = passage.step(pose, b.clearance(), g.length, g.width, dt);
         }
         match step {
