@@ -23,6 +23,11 @@
 //! A [`Retrace::replay`] drives a given path forward to its end, turning on the spot (sweep
 //! checked) to face it where needed: Bug1 goes back to its closest point so, along the loop
 //! it followed.
+//!
+//! Either ends blocked where, facing its way on, the robot gets no farther for a few seconds.
+//! On a drifting pose the believed path can run into what the sensor sees (a replay of 50 m
+//! drove into a room's corner so): the drive is refused there, and what the sweep check left,
+//! a turn on the spot of a milliradian a step, went on to the timeout, standing at the wall.
 
 use std::collections::VecDeque;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -52,6 +57,10 @@ const K_HEADING: f64 = 2.0;
 const DRIVE_WITHIN: f64 = 0.5;
 /// A retrace taking longer than this has failed, s.
 const TIMEOUT: f64 = 90.0;
+/// Facing the way on, a retrace that gets no farther than this along it ...
+const STALL_DISTANCE: f64 = 0.05;
+/// ... in this long is blocked, s.
+const STALL: f64 = 4.0;
 /// Trail points this near the body's axis lie straight behind it, m.
 const ALONG_AXIS: f64 = 0.1;
 
@@ -150,6 +159,9 @@ pub struct Retrace {
     speed: f64,
     /// Time the drive may take, s.
     timeout: f64,
+    /// When the robot last got [`STALL_DISTANCE`] farther facing the way on (or was turning
+    /// to face it), s, and the distance driven then, m.
+    progress: (f64, f64),
 }
 
 impl Retrace {
@@ -172,6 +184,7 @@ impl Retrace {
             away,
             since: time,
             driven: (0.0, None),
+            progress: (time, 0.0),
             backs: true,
             speed: FORWARD_SPEED,
             timeout: TIMEOUT,
@@ -196,6 +209,7 @@ impl Retrace {
             away: f64::INFINITY,
             since: time,
             driven: (0.0, None),
+            progress: (time, 0.0),
             backs: false,
             speed,
             // Twice the time driving takes, turns on the spot on top.
@@ -264,6 +278,14 @@ impl Retrace {
         };
         // Straight on helps a replay only when it faces the way on.
         let straight_on = self.backs || error.abs() <= DRIVE_WITHIN;
+        // Facing the way on, the robot drives; turns on the spot there only steer. Where they
+        // go on without the robot getting anywhere (the believed path runs into what the
+        // sensor sees: the drive is blocked, each turn a milliradian), it is blocked.
+        if error.abs() > DRIVE_WITHIN || *driven >= self.progress.1 + STALL_DISTANCE {
+            self.progress = (time, *driven);
+        } else if time - self.progress.0 > STALL {
+            return RetraceStep::Blocked;
+        }
         [Some(drive), Some(turn), straight_on.then_some(straight)]
             .into_iter()
             .flatten()
@@ -501,5 +523,25 @@ mod tests {
         // It ends facing north, having turned about first.
         assert!((last.yaw - FRAC_PI_2).abs() < 0.5, "{last:?}");
         assert!(Retrace::replay(vec![DVec2::ZERO], 0.4, 0.0).is_none());
+    }
+
+    #[test]
+    fn a_replay_facing_a_wall_across_its_way_ends_blocked_instead_of_shuffling() {
+        // The believed path runs on through a wall 1.5 m ahead (odometry drifted): the robot
+        // faces it within a few milliradians. Driving on is blocked; the turns on the spot
+        // left at that error are a shuffle of milliradians a step, standing against the wall
+        // until the timeout. Once the robot gets no farther for a while, the follower is
+        // handed the wall instead.
+        let path: Vec<DVec2> = (0..=40).map(|k| DVec2::new(0.1 * k as f64, 0.0)).collect();
+        let world = side(DVec2::new(1.5, -2.0), DVec2::new(1.5, 2.0));
+        let mut r = Retrace::replay(path, 0.3, 0.0).unwrap();
+        let (end, poses) = drive(&mut r, Pose::new(0.0, 0.0, 0.0, 0.03), &world);
+        assert_eq!(end, RetraceStep::Blocked);
+        let last = poses.last().unwrap();
+        assert!(last.x + L / 2.0 < 1.5, "{last:?}");
+        // Blocked soon after the drive is (about 4 s to get there, 4 s more): not at the
+        // timeout (90 s and more).
+        let time = 0.1 * poses.len() as f64;
+        assert!(time < 15.0, "{time} s, {last:?}");
     }
 }
