@@ -27,7 +27,8 @@
 //! Either ends blocked where, facing its way on, the robot gets no farther for a few seconds.
 //! On a drifting pose the believed path can run into what the sensor sees (a replay of 50 m
 //! drove into a room's corner so): the drive is refused there, and what the sweep check left,
-//! a turn on the spot of a milliradian a step, went on to the timeout, standing at the wall.
+//! a turn on the spot of a milliradian a step, went on for half a minute, standing at the
+//! wall (the timeout is 90 s and more).
 
 use std::collections::VecDeque;
 use std::f64::consts::{FRAC_PI_2, PI};
