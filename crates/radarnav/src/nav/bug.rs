@@ -339,8 +339,8 @@ struct Boundary {
     /// Bug1: the goal lies beyond the closed loop's boundary (inside the obstacle it went
     /// round, or outside the room it went round the inside of).
     goal_beyond: bool,
-    /// Bug1: this boundary was taken up where the way from the last leave point (this far
-    /// from the goal) met another obstacle at once; its closest point must be nearer.
+    /// Bug1: this boundary was taken up where the way from the last leave point met another
+    /// obstacle at once; its closest point must come nearer the goal than this, m.
     nearer_than: Option<f64>,
     /// Bug2: within the m-line tolerance at the last call.
     on_mline: bool,
@@ -579,9 +579,11 @@ pub struct BugController {
     mode: Mode,
     start: Option<DVec2>,
     last: Option<DVec2>,
-    /// Bug1: the last leave point, its distance to the goal, and whether the goal lay beyond
-    /// the boundary of the loop it was left from.
-    last_leave: Option<(DVec2, f64, bool)>,
+    /// Bug1: the last leave point, its distance to the goal, the distance of the closest
+    /// point of the loop it was left from (the leave may be a stand-in for that point, as
+    /// much as half the loop tolerance farther), and whether the goal lay beyond that loop's
+    /// boundary.
+    last_leave: Option<(DVec2, f64, f64, bool)>,
     /// Where the robot last stood still and since when (s): the no-progress watchdog.
     still: Option<(DVec2, f64)>,
     /// Whether the last command turned on the spot.
@@ -1033,7 +1035,7 @@ impl BugController {
                     // own loop must then come nearer the goal.
                     let mut nearer_than = None;
                     if self.mission.algorithm == BugAlgorithm::Bug1
-                        && let Some((_, d, beyond)) = self.last_leave
+                        && let Some((_, d, closest, beyond)) = self.last_leave
                         && goal_dist > d - radius
                     {
                         if beyond {
@@ -1043,7 +1045,12 @@ impl BugController {
                                 vehicle,
                             );
                         }
-                        nearer_than = Some(d);
+                        // Nearer than the leave point by half the loop tolerance (a
+                        // wobbly path's excursions), and nearer than the closest point it
+                        // stood in for: a leave short of the closest point that hits at that
+                        // point again would otherwise count the same loop as nearer, and
+                        // go round it again, lap after lap.
+                        nearer_than = Some((d - tol / 2.0).min(closest));
                     }
                     self.report.hit_points.push(p.to_array());
                     self.sighted = false;
@@ -1139,7 +1146,7 @@ impl BugController {
                                 .map(|s| s.0)
                                 .collect();
                             bd.goal_beyond = beyond_boundary(&ring, goal, self.follower.side());
-                            if bd.nearer_than.is_some_and(|d| bd.closest.1 > d - tol / 2.0) {
+                            if bd.nearer_than.is_some_and(|d| bd.closest.1 > d) {
                                 return self.no_path(
                                     "bug1: round a neighbour and back without getting nearer the goal",
                                     p,
@@ -1216,7 +1223,8 @@ impl BugController {
                                 || (as_close || passed) && !bd.goal_beyond && !replaying;
                             if leave && !passing {
                                 self.report.leave_points.push(p.to_array());
-                                self.last_leave = Some((p, goal_dist, bd.goal_beyond));
+                                self.last_leave =
+                                    Some((p, goal_dist, bd.closest.1, bd.goal_beyond));
                                 self.mode = Mode::ToGoal;
                                 return Decision::Drive(DriveCommand::STOP);
                             }
