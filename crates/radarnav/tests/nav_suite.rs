@@ -420,6 +420,31 @@ fn bug1_hitting_again_where_its_loop_came_nearest_stops_going_round() {
 }
 
 #[test]
+fn bug1_leaves_its_loop_for_the_goal_in_sight() {
+    // The goal inside a C open away from the start: Bug1 with the radar went round the whole
+    // C, past the goal in sight, before leaving from the loop's closest point (72.0 m). It
+    // leaves where the goal is in sight and its way there free, as Bug2 does (26.9 m).
+    use radarnav::map::PoseSource;
+    use radarnav::nav::BugAlgorithm;
+    use radarnav::trials::SensorClass;
+    let map = trial_map("nav/c-goal");
+    let run = run_one(
+        &map,
+        BugAlgorithm::Bug1,
+        SensorClass::Radar,
+        PoseSource::Truth,
+        1,
+    );
+    assert_clean(std::slice::from_ref(&run));
+    let why = failures(std::slice::from_ref(&run)).join("\n");
+    assert!(
+        run.distance < 40.0,
+        "went round the C first: {:.1} m\n{why}",
+        run.distance
+    );
+}
+
+#[test]
 fn bug2_follows_the_hit_obstacle_the_other_way_round_after_a_loop_round_a_neighbour() {
     // A map drawn at random after the suites were tuned: a bush field. Bug2's follower left
     // the hit bush's boundary on the way round (a pocket between three bushes is a dead end

@@ -100,7 +100,10 @@
 //! * Bug2 leaves the boundary for a **goal in sight** (`GOAL_SIGHT`): nearer than its hit
 //!   point, ahead of the body's side, the body's corridor to it free. Driving straight there
 //!   meets nothing, so its progress holds off the m-line too (as in VisBug); a follower that
-//!   took up a room wall passes goals beyond the m-line's end and never crosses it nearer;
+//!   took up a room wall passes goals beyond the m-line's end and never crosses it nearer.
+//!   Bug1 leaves for it likewise: its loop would go on round past it and come back (72 m
+//!   against 27 m on `nav/c-goal`), and a loop long enough to drift on odometry may then
+//!   lose its way back to the loop's closest point;
 //! * a turn on the spot with a return inside the body's circumscribed circle first drives
 //!   on to where the turn is clear, if the sensor sees that within 0.5 m (a corner beside
 //!   the body; a 270° laser is blind behind), else backs to where it is clear within 0.3 m,
@@ -606,7 +609,7 @@ pub struct BugController {
     retrace: Option<Retrace>,
     /// Dead ends met at this standoff (believed).
     dead_ends: Vec<DVec2>,
-    /// Bug2 left the boundary for the goal in sight: it is approached while the body's
+    /// The Bug left the boundary for the goal in sight: it is approached while the body's
     /// corridor to it stays free, whatever the bumpers beside the corridor say.
     sighted: bool,
     report: BugReport,
@@ -1084,8 +1087,25 @@ impl BugController {
                 if looped {
                     self.report.loops += 1;
                 }
+                // The goal in sight (within `GOAL_SIGHT`, where the sensor looks), nearer than
+                // the hit point, the body's corridor to it (and a margin past it) free:
+                // driving straight there reaches it and meets nothing.
+                let in_sight = |hit_goal_dist: f64| {
+                    goal_dist <= GOAL_SIGHT
+                        && heading.abs() <= std::f64::consts::FRAC_PI_2
+                        && goal_dist < hit_goal_dist - CLOSER_BY / 2.0
+                        && way_to_goal_free()
+                };
                 match self.mission.algorithm {
                     BugAlgorithm::Bug1 => {
+                        // As Bug2's below: the loop would go on round past the goal and
+                        // come back, and on odometry drift may lose the way back.
+                        if in_sight(bd.hit_goal_dist) && !passing {
+                            self.report.leave_points.push(p.to_array());
+                            self.sighted = true;
+                            self.mode = Mode::ToGoal;
+                            return Decision::Drive(DriveCommand::STOP);
+                        }
                         // Points met while turning away at the hit point are not on the
                         // followed path: candidates start once the robot has left it.
                         if !bd.circled && bd.away.is_some() && goal_dist < bd.closest.1 {
@@ -1308,11 +1328,7 @@ impl BugController {
                         // VisBug). Only where the sensor looks (a 270° laser is blind
                         // behind) and within `GOAL_SIGHT`. A follower that took up the room
                         // wall passes such goals and never crosses the m-line nearer.
-                        let in_sight = goal_dist <= GOAL_SIGHT
-                            && heading.abs() <= std::f64::consts::FRAC_PI_2
-                            && goal_dist < bd.hit_goal_dist - CLOSER_BY / 2.0
-                            && way_to_goal_free();
-                        if in_sight && !passing {
+                        if in_sight(bd.hit_goal_dist) && !passing {
                             self.report.leave_points.push(p.to_array());
                             self.sighted = true;
                             self.mode = Mode::ToGoal;
