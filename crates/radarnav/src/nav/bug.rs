@@ -313,6 +313,18 @@ enum Mode {
     Follow(Box<Boundary>),
 }
 
+/// Bug1's last leave from a loop, as far as the next hit needs it.
+#[derive(Clone, Copy, Debug)]
+struct Leave {
+    /// The leave point's distance to the goal, m.
+    goal_dist: f64,
+    /// The distance to the goal of the loop's closest point, which the leave may stand in for
+    /// as much as half the loop tolerance farther, m.
+    closest: f64,
+    /// The goal lay beyond the boundary of the loop left.
+    goal_beyond: bool,
+}
+
 #[derive(Clone, Debug)]
 struct Boundary {
     hit: DVec2,
@@ -582,11 +594,8 @@ pub struct BugController {
     mode: Mode,
     start: Option<DVec2>,
     last: Option<DVec2>,
-    /// Bug1: the last leave point, its distance to the goal, the distance of the closest
-    /// point of the loop it was left from (the leave may be a stand-in for that point, as
-    /// much as half the loop tolerance farther), and whether the goal lay beyond that loop's
-    /// boundary.
-    last_leave: Option<(DVec2, f64, f64, bool)>,
+    /// Bug1: the last leave from a loop.
+    last_leave: Option<Leave>,
     /// Where the robot last stood still and since when (s): the no-progress watchdog.
     still: Option<(DVec2, f64)>,
     /// Whether the last command turned on the spot.
@@ -1038,10 +1047,10 @@ impl BugController {
                     // own loop must then come nearer the goal.
                     let mut nearer_than = None;
                     if self.mission.algorithm == BugAlgorithm::Bug1
-                        && let Some((_, d, closest, beyond)) = self.last_leave
-                        && goal_dist > d - radius
+                        && let Some(left) = self.last_leave
+                        && goal_dist > left.goal_dist - radius
                     {
-                        if beyond {
+                        if left.goal_beyond {
                             return self.no_path(
                                 "bug1: the line from the leave point toward the goal re-enters the obstacle",
                                 p,
@@ -1053,7 +1062,7 @@ impl BugController {
                         // stood in for: a leave short of the closest point that hits at that
                         // point again would otherwise count the same loop as nearer, and
                         // go round it again, lap after lap.
-                        nearer_than = Some((d - tol / 2.0).min(closest));
+                        nearer_than = Some((left.goal_dist - tol / 2.0).min(left.closest));
                     }
                     self.report.hit_points.push(p.to_array());
                     self.sighted = false;
@@ -1243,8 +1252,11 @@ impl BugController {
                                 || (as_close || passed) && !bd.goal_beyond && !replaying;
                             if leave && !passing {
                                 self.report.leave_points.push(p.to_array());
-                                self.last_leave =
-                                    Some((p, goal_dist, bd.closest.1, bd.goal_beyond));
+                                self.last_leave = Some(Leave {
+                                    goal_dist,
+                                    closest: bd.closest.1,
+                                    goal_beyond: bd.goal_beyond,
+                                });
                                 self.mode = Mode::ToGoal;
                                 return Decision::Drive(DriveCommand::STOP);
                             }
