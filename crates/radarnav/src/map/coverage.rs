@@ -65,12 +65,12 @@ impl CoverageTrack {
 
     /// Takes a sample now (the end of a run).
     pub fn sample(&mut self, time: f64, grid: &Grid) {
-        let s = self.truth.score(grid);
+        let (free, hidden) = self.truth.coverage(grid);
         let sample = CoverageSample {
             time,
             distance: self.distance,
-            free: s.free_coverage,
-            hidden: s.hidden_coverage,
+            free,
+            hidden,
         };
         if self.samples.last().is_some_and(|l| l.time == time) {
             self.samples.pop();

@@ -365,6 +365,20 @@ impl Grid {
         }
     }
 
+    /// Whether storage index `k` is sensor-clear: [`CellClass::sensor_clear`] of
+    /// [`Grid::class_at`], without the class's branches.
+    pub fn sensor_clear_at(&self, k: usize) -> bool {
+        let (occ, free) = (self.l_occupied, self.l_free);
+        let (s, p) = (self.sensed[k], self.passable[k]);
+        if free <= occ {
+            // Clear or see-through: sensed clear, or passable clear and not sensed occupied.
+            (s < free) | ((p < free) & (s <= occ))
+        } else {
+            // Thresholds `Occupancy::validate` refuses: the classes decide.
+            self.class_at(k).sensor_clear()
+        }
+    }
+
     /// The class of every cell, row by row from row 0.
     pub fn classes(&self) -> Vec<CellClass> {
         (0..self.sensed.len()).map(|k| self.class_at(k)).collect()

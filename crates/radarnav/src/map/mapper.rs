@@ -379,8 +379,7 @@ impl Mapper {
         self.grid.insert(&first, true);
         self.grid.insert(&through, false);
         self.grid.insert(&misses, misses_are_passable(scan.kind));
-        inside.sort_unstable();
-        inside.dedup();
+        // Neighbouring rays cross the same foliage cells: `mark_cells` changes each once.
         self.grid.mark_cells(inside, true, Layers::Passable);
         self.scans += 1;
     }

@@ -55,6 +55,8 @@ pub struct Truth {
     width: usize,
     height: usize,
     cells: Vec<TruthCell>,
+    /// Free cells (hidden ones included) and hidden cells: [`Truth::coverage`]'s totals.
+    free_hidden: (usize, usize),
 }
 
 impl Truth {
@@ -75,6 +77,7 @@ impl Truth {
                 width: 0,
                 height: 0,
                 cells: Vec::new(),
+                free_hidden: (0, 0),
             };
         };
         let (c0, c1) = (
@@ -160,7 +163,7 @@ impl Truth {
                     a
                 },
             );
-        let cells = (0..width * height)
+        let cells: Vec<TruthCell> = (0..width * height)
             .map(|k| {
                 if obstacle[k] {
                     TruthCell::Obstacle
@@ -179,6 +182,7 @@ impl Truth {
             origin: c0,
             width,
             height,
+            free_hidden: free_hidden(&cells),
             cells,
         }
     }
@@ -197,6 +201,7 @@ impl Truth {
             origin,
             width,
             height,
+            free_hidden: free_hidden(&cells),
             cells,
         }
     }
@@ -225,6 +230,35 @@ impl Truth {
             n(TruthCell::Outside),
             n(TruthCell::Obstacle),
         )
+    }
+
+    /// The free and hidden coverage of `grid` (same resolution): [`MapScores::free_coverage`]
+    /// and [`MapScores::hidden_coverage`] of [`Truth::score`], the same values, counted over
+    /// the rows and columns both rasters hold, as a run samples them once a second.
+    pub fn coverage(&self, grid: &Grid) -> (Option<f64>, Option<f64>) {
+        let is_free = |t: TruthCell| matches!(t, TruthCell::Free | TruthCell::Hidden);
+        let (free_true, hidden) = self.free_hidden;
+        let (mut free_seen, mut hidden_seen) = (0usize, 0usize);
+        // The overlap of the two rasters, in global cells: a cell off the grid is unknown.
+        let (g0, t0) = (grid.origin_cell(), self.origin);
+        let x0 = g0.0.max(t0.0);
+        let x1 = (g0.0 + grid.width() as i64).min(t0.0 + self.width as i64);
+        let y0 = g0.1.max(t0.1);
+        let y1 = (g0.1 + grid.height() as i64).min(t0.1 + self.height as i64);
+        if x0 < x1 {
+            let n = (x1 - x0) as usize;
+            for y in y0..y1 {
+                let t = (y - t0.1) as usize * self.width + (x0 - t0.0) as usize;
+                let g = (y - g0.1) as usize * grid.width() + (x0 - g0.0) as usize;
+                for (i, &c) in self.cells[t..t + n].iter().enumerate() {
+                    let seen = usize::from(grid.sensor_clear_at(g + i));
+                    free_seen += usize::from(is_free(c)) & seen;
+                    hidden_seen += usize::from(c == TruthCell::Hidden) & seen;
+                }
+            }
+        }
+        let ratio = |a: usize, b: usize| (b > 0).then(|| a as f64 / b as f64);
+        (ratio(free_seen, free_true), ratio(hidden_seen, hidden))
     }
 
     /// Scores `grid` (same resolution) against this truth.
@@ -328,6 +362,13 @@ pub fn score_maps<'m>(
             truths[i].score(m.grid())
         })
         .collect()
+}
+
+/// The free cells (hidden ones included) and the hidden cells of `cells`.
+fn free_hidden(cells: &[TruthCell]) -> (usize, usize) {
+    let n = |t| cells.iter().filter(|&&c| c == t).count();
+    let hidden = n(TruthCell::Hidden);
+    (n(TruthCell::Free) + hidden, hidden)
 }
 
 fn index_in(c: CellIndex, origin: CellIndex, width: usize, height: usize) -> Option<usize> {
@@ -434,6 +475,38 @@ mod tests {
         let e = truth.score(&Grid::new(1.0, Occupancy::default()));
         assert_eq!((e.obstacle_precision, e.free_precision), (None, None));
         assert_eq!(e.hidden_coverage, Some(0.0));
+    }
+
+    proptest::proptest! {
+        /// The once-a-second coverage is the score's, on rasters that overlap in part.
+        #[test]
+        fn coverage_is_the_scores(
+            kinds in proptest::collection::vec(0u8..4, 120),
+            width in 1usize..12,
+            height in 1usize..10,
+            origin in (-6i64..6, -6i64..6),
+            marks in proptest::collection::vec(((-8i64..14, -8i64..14), 0u8..5, 1usize..6), 0..80),
+        ) {
+            let cells: Vec<TruthCell> = kinds[..width * height]
+                .iter()
+                .map(|k| [TruthCell::Free, TruthCell::Hidden, TruthCell::Outside, TruthCell::Obstacle][*k as usize])
+                .collect();
+            let truth = Truth::from_cells(1.0, origin, width, cells);
+            let mut g = Grid::new(1.0, Occupancy::default());
+            // Repeated marks: one miss alone leaves a cell unknown.
+            for (c, how, times) in marks {
+                for _ in 0..times {
+                    match how {
+                        0 => g.mark_cells([c], true, Layers::Both),
+                        1 => g.mark_cells([c], true, Layers::Passable),
+                        2 => g.mark_cells([c], false, Layers::Sensed),
+                        _ => g.mark_cells([c], false, Layers::Both),
+                    }
+                }
+            }
+            let s = truth.score(&g);
+            proptest::prop_assert_eq!(truth.coverage(&g), (s.free_coverage, s.hidden_coverage));
+        }
     }
 
     #[test]

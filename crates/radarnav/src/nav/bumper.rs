@@ -210,6 +210,22 @@ impl Bumpers {
         band: f64,
         rule: BumperRule,
     ) -> Self {
+        Self::sense_with(scan, mount, sectors, safety, band, rule, &mut Vec::new())
+    }
+
+    /// [`Bumpers::sense`] taking each ray's sine and cosine from `dirs` (ray direction,
+    /// (sine, cosine)) where its direction is the one there, bit for bit, and filing them
+    /// there otherwise: a sensor's rays keep their directions on the robot from scan to
+    /// scan.
+    fn sense_with(
+        scan: &Scan,
+        mount: &Pose,
+        sectors: usize,
+        safety: f64,
+        band: f64,
+        rule: BumperRule,
+        dirs: &mut Vec<(f64, (f64, f64))>,
+    ) -> Self {
         let width = TAU / sectors as f64;
         let mut rays = vec![0usize; sectors];
         let mut close = vec![0usize; sectors];
@@ -219,7 +235,15 @@ impl Bumpers {
         for (i, &r) in scan.ranges.iter().enumerate() {
             let dir = mount.yaw + scan.angles(i).0;
             let (angle, dist) = if r.is_finite() {
-                let (s, c) = dir.sin_cos();
+                let (s, c) = match dirs.get(i) {
+                    Some(&(d, sc)) if d.to_bits() == dir.to_bits() => sc,
+                    _ => {
+                        let sc = dir.sin_cos();
+                        dirs.resize(dirs.len().max(i + 1), (f64::NAN, (f64::NAN, f64::NAN)));
+                        dirs[i] = (dir, sc);
+                        sc
+                    }
+                };
                 let (x, y) = (mount.x + f64::from(r) * c, mount.y + f64::from(r) * s);
                 (y.atan2(x), x.hypot(y))
             } else if r < 0.0 {
@@ -387,6 +411,8 @@ pub struct BumperSensor {
     scan_pose: Pose,
     /// The latest scan's clearance returns in the robot frame of that scan.
     scan_clearance: Vec<DVec2>,
+    /// Each ray's direction on the robot with its sine and cosine ([`Bumpers::sense`]).
+    dirs: Vec<(f64, (f64, f64))>,
 }
 
 impl BumperSensor {
@@ -401,6 +427,7 @@ impl BumperSensor {
             moved: 0.0,
             scan_pose: Pose::default(),
             scan_clearance: Vec::new(),
+            dirs: Vec::new(),
         }
     }
 
@@ -453,13 +480,14 @@ impl BumperSensor {
             self.stamp = scan.stamp;
             let c = &self.config;
             let mount = &input.sensors[i].mount;
-            let mut b = Bumpers::sense(
+            let mut b = Bumpers::sense_with(
                 scan,
                 mount,
                 c.sectors,
                 c.safety_for(input.vehicle),
                 c.band,
                 c.rule,
+                &mut self.dirs,
             );
             b.noise = input.sensors[i].config.range_noise();
             let last = self.scan_pose;
@@ -627,6 +655,32 @@ pub(crate) mod tests {
         s.angle_increment = inc;
         s.ranges = (0..n).map(|i| f(-0.5 * span + i as f64 * inc)).collect();
         s
+    }
+
+    #[test]
+    fn remembered_ray_directions_give_the_same_bumpers() {
+        // Returns everywhere but a gap: some rays finite, some not, some below range.
+        let near = |a: f64| match a {
+            a if a.abs() < 0.3 => f32::INFINITY,
+            a if a > 2.5 => -1.0,
+            a => (1.0 + 0.3 * a.sin()) as f32,
+        };
+        let (small, large) = (ring_scan(90, near), ring_scan(360, near));
+        let mut dirs = Vec::new();
+        let mounts = [
+            Pose::new(0.2, 0.0, 0.3, 0.0),
+            Pose::new(0.2, 0.0, 0.3, 0.0),
+            Pose::new(-0.1, 0.05, 0.3, 0.4),
+        ];
+        for scan in [&small, &large, &small] {
+            for mount in &mounts {
+                let fresh = Bumpers::sense(scan, mount, 8, 1.27, 0.5, BumperRule::All);
+                let kept =
+                    Bumpers::sense_with(scan, mount, 8, 1.27, 0.5, BumperRule::All, &mut dirs);
+                assert_eq!(kept, fresh);
+            }
+        }
+        assert_eq!(dirs.len(), 360);
     }
 
     #[test]

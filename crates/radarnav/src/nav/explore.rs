@@ -412,28 +412,62 @@ impl Behaviour for ExploreController {
 /// Distance of every cell of a `w` × `h` grid of `res`-metre cells to the nearest of `seeds`
 /// (cell indices), out to `cap` metres (farther: infinite): a brushfire on the 8-neighbour
 /// grid, within a few per cent of Euclidean.
+///
+/// A cell within `cap` lowers each neighbour to its own distance plus the step (`res`, or
+/// `res`·√2 across a corner) until no cell changes. Every order of those relaxations ends in
+/// the same distances, bit for bit (addition rounds monotonically, so the values one order
+/// reaches bound the other's from below), so the order need not be a heap's: cells wait in
+/// buckets one cell wide by distance (Dial's algorithm; a step is at least a bucket, so a
+/// cell is almost never lowered after it spread), under half the heap's time.
 fn brushfire(seeds: &[usize], w: usize, h: usize, res: f64, cap: f64) -> Vec<f64> {
     let mut dist = vec![f64::INFINITY; w * h];
-    let mut heap = BinaryHeap::new();
     for &k in seeds {
         dist[k] = 0.0;
-        heap.push(Cost(0.0, k));
     }
-    while let Some(Cost(d, k)) = heap.pop() {
-        if d > dist[k] || d > cap {
-            continue;
-        }
-        let (i, j) = ((k % w) as i64, (k / w) as i64);
-        for (di, dj) in NEIGHBOURS {
-            let (a, b) = (i + di, j + dj);
-            if a < 0 || b < 0 || a as usize >= w || b as usize >= h {
+    let diagonal = res * 2f64.sqrt();
+    // No path on the grid is longer than (w + h) diagonal steps: the buckets stay few
+    // whatever the cap.
+    let reach = cap.min((w + h) as f64 * diagonal);
+    let mut buckets: Vec<Vec<usize>> = vec![Vec::new(); (reach / res) as usize + 2];
+    // Only seeds beside a cell that is not one spread: inside a wall a seed has nothing to
+    // lower.
+    buckets[0] = seeds
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let (i, j) = ((k % w) as i64, (k / w) as i64);
+            NEIGHBOURS.iter().any(|(di, dj)| {
+                let (a, b) = (i + di, j + dj);
+                a >= 0
+                    && b >= 0
+                    && (a as usize) < w
+                    && (b as usize) < h
+                    && dist[b as usize * w + a as usize] > 0.0
+            })
+        })
+        .collect();
+    for bucket in 0..buckets.len() {
+        while let Some(k) = buckets[bucket].pop() {
+            let d = dist[k];
+            if d > cap {
                 continue;
             }
-            let n = b as usize * w + a as usize;
-            let nd = d + res * ((di * di + dj * dj) as f64).sqrt();
-            if nd < dist[n] {
-                dist[n] = nd;
-                heap.push(Cost(nd, n));
+            let (i, j) = ((k % w) as i64, (k / w) as i64);
+            for (di, dj) in NEIGHBOURS {
+                let (a, b) = (i + di, j + dj);
+                if a < 0 || b < 0 || a as usize >= w || b as usize >= h {
+                    continue;
+                }
+                let n = b as usize * w + a as usize;
+                let nd = d + if di != 0 && dj != 0 { diagonal } else { res };
+                if nd < dist[n] {
+                    dist[n] = nd;
+                    // Beyond the cap a cell spreads nothing: it needs no bucket.
+                    if nd <= cap {
+                        let to = ((nd / res) as usize).clamp(bucket, buckets.len() - 1);
+                        buckets[to].push(n);
+                    }
+                }
             }
         }
     }
@@ -639,6 +673,52 @@ mod tests {
         hard: 0.5,
         wanted: 0.5,
     };
+
+    proptest::proptest! {
+        /// The brushfire's distances are the fixed point of relaxing every cell within the
+        /// cap into its neighbours, bit for bit, walls of seeds included.
+        #[test]
+        fn brushfire_is_the_relaxed_distance(
+            seeded in proptest::collection::vec(proptest::bool::weighted(0.3), 1..200),
+            w in 1usize..16,
+            cap in 0.05f64..0.6,
+        ) {
+            let h = seeded.len().div_ceil(w);
+            let seeds: Vec<usize> = (0..w * h)
+                .filter(|&k| seeded.get(k).copied().unwrap_or(false))
+                .collect();
+            let res = 0.05;
+            let mut want = vec![f64::INFINITY; w * h];
+            for &k in &seeds {
+                want[k] = 0.0;
+            }
+            let mut changed = true;
+            while changed {
+                changed = false;
+                for k in 0..w * h {
+                    if want[k] > cap {
+                        continue;
+                    }
+                    let (i, j) = ((k % w) as i64, (k / w) as i64);
+                    for (di, dj) in NEIGHBOURS {
+                        let (a, b) = (i + di, j + dj);
+                        if a < 0 || b < 0 || a as usize >= w || b as usize >= h {
+                            continue;
+                        }
+                        let n = b as usize * w + a as usize;
+                        let nd = want[k] + res * ((di * di + dj * dj) as f64).sqrt();
+                        if nd < want[n] {
+                            want[n] = nd;
+                            changed = true;
+                        }
+                    }
+                }
+            }
+            let got = brushfire(&seeds, w, h, res, cap);
+            let bits = |v: &[f64]| v.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+            proptest::prop_assert_eq!(bits(&got), bits(&want));
+        }
+    }
 
     /// A frontier planner whose map holds five scans from the origin of a 3 m ring of walls,
     /// open (no return) for |azimuth| < `gap_deg`.
