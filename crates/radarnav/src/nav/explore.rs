@@ -435,15 +435,9 @@ fn brushfire(seeds: &[usize], w: usize, h: usize, res: f64, cap: f64) -> Vec<f64
         .iter()
         .copied()
         .filter(|&k| {
-            let (i, j) = ((k % w) as i64, (k / w) as i64);
-            NEIGHBOURS.iter().any(|(di, dj)| {
-                let (a, b) = (i + di, j + dj);
-                a >= 0
-                    && b >= 0
-                    && (a as usize) < w
-                    && (b as usize) < h
-                    && dist[b as usize * w + a as usize] > 0.0
-            })
+            NEIGHBOURS
+                .iter()
+                .any(|&step| neighbour(k, step, w, h).is_some_and(|n| dist[n] > 0.0))
         })
         .collect();
     for bucket in 0..buckets.len() {
@@ -452,13 +446,10 @@ fn brushfire(seeds: &[usize], w: usize, h: usize, res: f64, cap: f64) -> Vec<f64
             if d > cap {
                 continue;
             }
-            let (i, j) = ((k % w) as i64, (k / w) as i64);
             for (di, dj) in NEIGHBOURS {
-                let (a, b) = (i + di, j + dj);
-                if a < 0 || b < 0 || a as usize >= w || b as usize >= h {
+                let Some(n) = neighbour(k, (di, dj), w, h) else {
                     continue;
-                }
-                let n = b as usize * w + a as usize;
+                };
                 let nd = d + if di != 0 && dj != 0 { diagonal } else { res };
                 if nd < dist[n] {
                     dist[n] = nd;
@@ -472,6 +463,13 @@ fn brushfire(seeds: &[usize], w: usize, h: usize, res: f64, cap: f64) -> Vec<f64
         }
     }
     dist
+}
+
+/// Cell `k`'s neighbour one `(column, row)` step away on a `w` × `h` grid (row-major), if
+/// the grid holds it.
+fn neighbour(k: usize, (di, dj): (i64, i64), w: usize, h: usize) -> Option<usize> {
+    let (a, b) = ((k % w) as i64 + di, (k / w) as i64 + dj);
+    (a >= 0 && b >= 0 && (a as usize) < w && (b as usize) < h).then(|| b as usize * w + a as usize)
 }
 
 /// The frontier strategy's map and plan.
@@ -674,6 +672,18 @@ mod tests {
         wanted: 0.5,
     };
 
+    #[test]
+    fn neighbours_stay_on_the_grid() {
+        // 3 × 2 grid: 0 1 2 / 3 4 5.
+        assert_eq!(neighbour(0, (1, 0), 3, 2), Some(1));
+        assert_eq!(neighbour(0, (1, 1), 3, 2), Some(4));
+        assert_eq!(neighbour(0, (-1, 0), 3, 2), None);
+        assert_eq!(neighbour(2, (1, 0), 3, 2), None, "no wrap to the next row");
+        assert_eq!(neighbour(3, (0, -1), 3, 2), Some(0));
+        assert_eq!(neighbour(5, (0, 1), 3, 2), None);
+        assert_eq!(neighbour(4, (-1, -1), 3, 2), Some(0));
+    }
+
     proptest::proptest! {
         /// The brushfire's distances are the fixed point of relaxing every cell within the
         /// cap into its neighbours, bit for bit, walls of seeds included.
@@ -699,13 +709,10 @@ mod tests {
                     if want[k] > cap {
                         continue;
                     }
-                    let (i, j) = ((k % w) as i64, (k / w) as i64);
                     for (di, dj) in NEIGHBOURS {
-                        let (a, b) = (i + di, j + dj);
-                        if a < 0 || b < 0 || a as usize >= w || b as usize >= h {
+                        let Some(n) = neighbour(k, (di, dj), w, h) else {
                             continue;
-                        }
-                        let n = b as usize * w + a as usize;
+                        };
                         let nd = want[k] + res * ((di * di + dj * dj) as f64).sqrt();
                         if nd < want[n] {
                             want[n] = nd;
