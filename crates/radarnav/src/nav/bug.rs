@@ -839,13 +839,13 @@ impl Behaviour for BugController {
                 // the way the robot came by (its body squeezes through where its disc does
                 // not). A robot that has no way back (it stands in a dead end that narrow)
                 // drives on out all the same.
-                let sigma = b.noise().sigma(radius);
+                let sigma = b.steady_sigma(radius);
                 let room = |max: f64, sign: f64, squeeze: bool| {
                     room_to_turn(b.clearance(), v.length, v.width, max - *moved, sign)
                         .filter(|&s| {
                             sign < 0.0
                                 || squeeze
-                                || !narrows_ahead(b.clearance(), v.length, v.width, sigma, s)
+                                || !narrows_ahead(b.steady_clearance(), v.length, v.width, sigma, s)
                         })
                         .map(|_| sign * BACK_SPEED)
                 };
@@ -1013,10 +1013,10 @@ impl BugController {
         // to where it could not turn, as the passages' narrowing check says likewise.
         let narrows = heading.abs() <= TURN_IN_PLACE
             && narrows_ahead(
-                b.clearance(),
+                b.steady_clearance(),
                 vehicle.length,
                 vehicle.width,
-                b.noise().sigma(radius),
+                b.steady_sigma(radius),
                 vehicle.length / 2.0 + 0.15,
             );
         let hit = bumped || b.toward(heading) != BumperState::Clear || narrows;

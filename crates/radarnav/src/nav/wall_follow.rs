@@ -247,7 +247,7 @@ impl WallFollower {
                     if fresh && !dead_end {
                         g.passage = Some(
                             Passage::new(seen, 2.0 * radius, self.speed)
-                                .with_noise(b.noise().sigma(radius)),
+                                .with_noise(b.steady_sigma(radius)),
                         );
                     }
                 }
@@ -255,12 +255,13 @@ impl WallFollower {
             }
         }
         let passage = g.passage.as_mut()?;
-        let mut step = passage.step(pose, b.clearance(), g.length, g.width, dt);
+        let (raw, steady) = (b.clearance(), b.steady_clearance());
+        let mut step = passage.step(pose, raw, steady, g.length, g.width, dt);
         if let PassStep::Aside(aside) = step {
             g.done = Some((passage.gap().mid, g.travelled));
             *passage =
-                Passage::new(aside, 2.0 * radius, self.speed).with_noise(b.noise().sigma(radius));
-            step = passage.step(pose, b.clearance(), g.length, g.width, dt);
+                Passage::new(aside, 2.0 * radius, self.speed).with_noise(b.steady_sigma(radius));
+            step = passage.step(pose, raw, steady, g.length, g.width, dt);
         }
         match step {
             PassStep::Drive(v, omega) => Some(DriveCommand::twist(v, omega)),
