@@ -634,7 +634,9 @@ impl BugController {
             ..Default::default()
         };
         Self {
-            bumpers: BumperSensor::new(mission.bumpers.clone()).believing(mission.pose),
+            bumpers: BumperSensor::new(mission.bumpers.clone())
+                .believing(mission.pose)
+                .denoising(),
             follower: WallFollower::new(mission.follow, mission.speed, TURN_RATE),
             mission,
             rate_hz,
