@@ -498,13 +498,26 @@ impl Bumpers {
     /// taken among (the passages' and Bug's narrowing check, with [`Bumpers::steady_sigma`]). The
     /// guard and every other check keep the raw returns: a median sits up to a centimetre out
     /// from a corner's tip, and a turn that looks free on medians the guard refuses on the raw
-    /// returns.
+    /// returns (the guard takes these only for a robot it has stalled, [`super::WithRecoil`]).
     pub fn steady_clearance(&self) -> &[DVec2] {
         if self.steady.is_empty() {
             &self.clearance
         } else {
             &self.steady
         }
+    }
+
+    /// Whether [`Bumpers::steady_clearance`] holds denoised returns (a noisy sensor's, for
+    /// bumpers that denoise), not the raw ones.
+    pub fn is_denoised(&self) -> bool {
+        !self.steady.is_empty()
+    }
+
+    /// These bumpers with `steady` as their denoised returns (robot frame).
+    #[cfg(test)]
+    pub(crate) fn with_steady(mut self, steady: Vec<DVec2>) -> Self {
+        self.steady = steady;
+        self
     }
 
     /// The range noise (m, one σ) of [`Bumpers::steady_clearance`]'s returns at `range` m:
@@ -944,6 +957,91 @@ pub(crate) mod tests {
             raw_blocked >= 15,
             "raw returns blocked in {raw_blocked} of 20"
         );
+    }
+
+    #[test]
+    fn the_guard_on_pooled_returns_lets_a_turn_clear_of_a_wall_by_centimetres_through() {
+        use super::super::guard::{Guarded, guard, guard_steady};
+        use crate::vehicle::{P3AT, Twist};
+        // A wall ahead-right of a P3AT standing still, seen by a UTM-30LX (σ 3 cm) at the
+        // body's centre over the last scans; turning left on the spot, the front-right
+        // corner sweeps across the wall's normal on a circle of the body's half-diagonal
+        // within the guard's horizon. 4.5 cm clear of that circle, the raw returns nearest the
+        // corners' path lie some 2.5 σ short of the wall and stop the turn in most trials
+        // (the robot stood turning against it until the watchdog gave up, r22700-crates);
+        // on the pooled returns the turn is free in every trial. 1 cm clear, they stop it in
+        // every trial.
+        let mount = Pose::default();
+        let turn = Twist { v: 0.0, omega: 0.8 };
+        let circle = 0.5 * P3AT.length.hypot(P3AT.width);
+        // The wall's normal: where the corner is at the end of the guard's 0.3 s horizon
+        // (it starts a centimetre farther from the wall than that).
+        let normal = -P3AT.width.atan2(P3AT.length) + 0.3 * turn.omega;
+        let guarded = |clear: f64, seed: u64| {
+            let ahead = wall_at(circle + clear);
+            let wall = move |a: f64| ahead(a - normal);
+            let past: Vec<(usize, DVec2)> = (1..=STEADY_SCANS as u64)
+                .flat_map(|k| {
+                    let scan = noisy_laser(wall, UTM_NOISE, 100 * seed + k);
+                    PastScan::of(&scan, &mount, Pose::default()).points
+                })
+                .collect();
+            let scan = noisy_laser(wall, UTM_NOISE, 100 * seed);
+            let raw = Bumpers::sense(&scan, &mount, 8, 1.27, 0.5, BumperRule::All);
+            let steady = denoised_returns(&scan, &mount, &past);
+            (
+                guard(raw.clearance(), &P3AT, turn),
+                guard_steady(&steady, &P3AT, turn),
+            )
+        };
+        let mut raw_stopped = 0;
+        for seed in 0..12 {
+            let (raw, steady) = guarded(0.045, seed);
+            raw_stopped += usize::from(raw == Guarded::Stop);
+            assert_eq!(steady, Guarded::Free, "4.5 cm, seed {seed}");
+            let (_, steady) = guarded(0.01, seed);
+            assert_eq!(steady, Guarded::Stop, "1 cm, seed {seed}");
+        }
+        assert!(raw_stopped >= 10, "raw stopped {raw_stopped} of 12");
+        // A crate's corner pointing at the robot there instead, 1 cm clear: the medians round
+        // its tip off (they lie up to a centimetre beyond it), the margin covers that.
+        let tip = |clear: f64| {
+            let u = DVec2::from_angle(normal);
+            let at = u * (circle + clear);
+            let faces = [
+                u.rotate(DVec2::from_angle(0.8)),
+                u.rotate(DVec2::from_angle(-0.8)),
+            ];
+            move |a: f64| {
+                let ray = DVec2::from_angle(a);
+                faces
+                    .iter()
+                    .filter_map(|f| {
+                        // at + s f = t ray, 0 <= s <= 0.5, t > 0.
+                        let det = ray.perp_dot(*f);
+                        (det.abs() > 1e-12).then(|| (at.perp_dot(*f) / det, at.perp_dot(ray) / det))
+                    })
+                    .filter(|&(t, s)| t > 0.0 && (0.0..=0.5).contains(&s))
+                    .map(|(t, _)| t as f32)
+                    .fold(f32::INFINITY, f32::min)
+            }
+        };
+        for seed in 0..12 {
+            let corner = tip(0.01);
+            let past: Vec<(usize, DVec2)> = (1..=STEADY_SCANS as u64)
+                .flat_map(|k| {
+                    let scan = noisy_laser(corner, UTM_NOISE, 100 * seed + k);
+                    PastScan::of(&scan, &mount, Pose::default()).points
+                })
+                .collect();
+            let scan = noisy_laser(corner, UTM_NOISE, 100 * seed);
+            let steady = denoised_returns(&scan, &mount, &past);
+            assert_eq!(
+                guard_steady(&steady, &P3AT, turn),
+                Guarded::Stop,
+                "corner, seed {seed}"
+            );
+        }
     }
 
     #[test]

@@ -80,7 +80,11 @@ pub trait Behaviour {
 ///
 /// Before that reflex comes the [`guard`]: each command of the behaviour is swept against
 /// its bumpers' returns, and one that would touch them is cut to a free part, or stopped
-/// with the behaviour told it bumped.
+/// with the behaviour told it bumped. A robot whose turns on the spot the guard has stopped
+/// for `STALL_PATIENCE` (10 s) without it moving off the spot (and no real bump there) has
+/// them judged on a noisy sensor's denoised returns ([`guard::guard_steady`]): on the raw
+/// ones a laser robot stood under a crate's corner its turn cleared by 5 cm until the
+/// watchdog gave up.
 #[derive(Clone, Debug)]
 pub struct WithRecoil<B> {
     behaviour: B,
@@ -93,11 +97,19 @@ pub struct WithRecoil<B> {
     /// A turn on the spot that bumped or that the guard stopped: its sense (±1) and the
     /// odometry pose it was stopped at.
     pressed: Option<(f64, Pose)>,
+    /// Where (odometry pose) and since when the guard has stopped turns on the spot without
+    /// the robot moving off that spot; since never after a real bump there.
+    stalled: Option<(Pose, f64)>,
 }
 
 /// A turn on the spot that bumped, or that the guard stopped, is not made again in the same
 /// sense until the robot has moved this far, m ([`WithRecoil`]).
 const PRESSED_MOVE: f64 = 0.02;
+
+/// Stalled this long on one spot by the guard stopping its turns (see [`WithRecoil`]), a
+/// robot with a noisy sensor has its turns on the spot checked on the denoised returns, s.
+/// (The Bug's watchdog gives up after 30 s.)
+const STALL_PATIENCE: f64 = 10.0;
 
 /// How long a recoil lasts, s, its speed, m/s, and its turn rate after a turn, rad/s.
 const RECOIL: (f64, f64, f64) = (0.6, 0.2, 0.5);
@@ -113,6 +125,7 @@ impl<B> WithRecoil<B> {
             recoiled: false,
             recoiling: false,
             pressed: None,
+            stalled: None,
         }
     }
 
@@ -136,6 +149,8 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
         } else if input.bumped && self.remaining == 0 {
             self.remaining = (RECOIL.0 * self.behaviour.rate_hz()).ceil() as u32;
             let (v, omega) = self.last;
+            // A real bump: no patience on this spot.
+            self.stalled = Some((*input.odometry, f64::INFINITY));
             if v == 0.0 && omega != 0.0 {
                 self.pressed = Some((omega.signum(), *input.odometry));
             }
@@ -159,8 +174,28 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
         let mut d = self
             .behaviour
             .decide(input, std::mem::take(&mut self.recoiled));
+        if self
+            .stalled
+            .is_some_and(|(at, _)| (input.odometry.xy() - at.xy()).length() > PRESSED_MOVE)
+        {
+            self.stalled = None;
+        }
+        let patient = self
+            .stalled
+            .is_some_and(|(_, since)| input.time - since >= STALL_PATIENCE);
         if let (Decision::Drive(cmd), Some(b)) = (d, self.behaviour.bumpers()) {
-            match guard::guard(b.clearance(), input.vehicle, input.vehicle.limit(cmd)) {
+            let t = input.vehicle.limit(cmd);
+            // Stalled, a turn on the spot is judged on the denoised returns: the nearest of
+            // hundreds of raw ones lie centimetres short of a wall the turn clears, and the
+            // robot would stand turning against it until the watchdog gave up.
+            let steady = patient && t.v == 0.0 && t.omega != 0.0 && b.is_denoised();
+            let guarded = if steady {
+                guard::guard_steady(b.steady_clearance(), input.vehicle, t)
+            } else {
+                guard::guard(b.clearance(), input.vehicle, t)
+            };
+            match guarded {
+                Guarded::Free if steady => self.pressed = None,
                 Guarded::Free => {}
                 Guarded::Replaced(t) => d = Decision::Drive(DriveCommand::Twist(t)),
                 Guarded::Stop => {
@@ -176,6 +211,9 @@ impl<B: Behaviour> Controller for WithRecoil<B> {
                         && self.pressed.is_none()
                     {
                         self.pressed = Some((t.omega.signum(), *input.odometry));
+                    }
+                    if t.v == 0.0 && t.omega != 0.0 && self.stalled.is_none() {
+                        self.stalled = Some((*input.odometry, input.time));
                     }
                 }
             }
@@ -272,9 +310,14 @@ mod tests {
     /// One control step of a P3-AT standing at `pose` (odometry and truth alike), without
     /// scans: the twist `c` commands.
     fn step(c: &mut WithRecoil<Steady>, pose: Pose, bumped: bool) -> Twist {
+        step_at(c, pose, bumped, 0.0)
+    }
+
+    /// [`step`] at `time` s.
+    fn step_at(c: &mut WithRecoil<Steady>, pose: Pose, bumped: bool, time: f64) -> Twist {
         let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
         twist(c.update(&ControlInput {
-            time: 0.0,
+            time,
             odometry: &pose,
             truth: &pose,
             bumped,
@@ -369,5 +412,54 @@ mod tests {
         c.behaviour.twist = (0.0, -0.8);
         let moved = Pose::new(0.03, 0.0, 0.0, 0.0);
         assert_eq!(run(&mut c, moved).omega, -0.8);
+    }
+
+    /// A noisy sensor's robot the guard keeps from turning on one spot turns once it has
+    /// stood there [`STALL_PATIENCE`], if the turn is free on the denoised returns: its raw
+    /// returns' nearest lie centimetres short of the wall (as a laser robot stood under a
+    /// crate's corner on `r22700-crates` until the watchdog gave up, its body 5 cm clear).
+    /// Not where the denoised returns stop the turn too, nor after a real bump there.
+    #[test]
+    fn a_stalled_turn_is_judged_on_denoised_returns_after_a_while() {
+        use super::bumper::BumperRule;
+        use super::bumper::tests::ring_scan;
+        let vehicle = crate::vehicle::vehicle("p3at").expect("p3at");
+        // A wall ahead-left whose normal the front-left corner crosses turning left, `clear`
+        // m beyond the corners' circle.
+        let circle = 0.5 * vehicle.length.hypot(vehicle.width);
+        let normal = vehicle.width.atan2(vehicle.length) + 0.2;
+        let wall = |clear: f64| {
+            let scan = ring_scan(720, |a: f64| {
+                let c = (a - normal).cos();
+                if c > 0.2 {
+                    ((circle + clear) / c) as f32
+                } else {
+                    f32::INFINITY
+                }
+            });
+            Bumpers::sense(&scan, &Pose::default(), 8, 1.27, 0.5, BumperRule::All)
+        };
+        let here = Pose::default();
+        let stalled = |steady_clear: f64, bump: bool| {
+            let mut c = WithRecoil::new(Steady::new(0.0, 0.8));
+            // Raw returns 1 cm inside the circle; denoised ones `steady_clear` beyond it.
+            let steady = wall(steady_clear).clearance().to_vec();
+            c.behaviour.bumpers = Some(wall(-0.01).with_steady(steady));
+            if bump {
+                step_at(&mut c, here, true, 0.0);
+            }
+            (1..=200)
+                .map(|k| step_at(&mut c, here, false, 0.1 * f64::from(k)).omega)
+                .collect::<Vec<f64>>()
+        };
+        let turns = stalled(0.045, false);
+        let first = turns.iter().position(|&w| w != 0.0).expect("turned");
+        assert!(
+            (0.1 * (first + 1) as f64 - 0.1 - STALL_PATIENCE).abs() < 0.15,
+            "first turn at step {first}"
+        );
+        assert!(turns[first..].iter().all(|&w| w == 0.8));
+        assert!(stalled(0.01, false).iter().all(|&w| w == 0.0));
+        assert!(stalled(0.045, true).iter().all(|&w| w != 0.8));
     }
 }
