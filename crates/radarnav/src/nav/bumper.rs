@@ -959,6 +959,26 @@ pub(crate) mod tests {
         );
     }
 
+    /// A UTM-30LX scan of ranges `f(azimuth)` from a sensor at `mount` (seeded), and its
+    /// returns denoised with `scans - 1` earlier scans of the same (seeds after it) pooled in,
+    /// all from one pose.
+    fn pooled_laser(
+        f: impl Fn(f64) -> f32 + Copy,
+        mount: &Pose,
+        seed: u64,
+        scans: u64,
+    ) -> (Scan, Vec<DVec2>) {
+        let past: Vec<(usize, DVec2)> = (1..scans)
+            .flat_map(|k| {
+                let scan = noisy_laser(f, UTM_NOISE, 100 * seed + k);
+                PastScan::of(&scan, mount, Pose::default()).points
+            })
+            .collect();
+        let scan = noisy_laser(f, UTM_NOISE, 100 * seed);
+        let steady = denoised_returns(&scan, mount, &past);
+        (scan, steady)
+    }
+
     #[test]
     fn the_guard_on_pooled_returns_lets_a_turn_clear_of_a_wall_by_centimetres_through() {
         use super::super::guard::{Guarded, guard, guard_steady};
@@ -974,21 +994,15 @@ pub(crate) mod tests {
         let mount = Pose::default();
         let turn = Twist { v: 0.0, omega: 0.8 };
         let circle = 0.5 * P3AT.length.hypot(P3AT.width);
+        let pooled = STEADY_SCANS as u64 + 1;
         // The wall's normal: where the corner is at the end of the guard's 0.3 s horizon
         // (it starts a centimetre farther from the wall than that).
         let normal = -P3AT.width.atan2(P3AT.length) + 0.3 * turn.omega;
         let guarded = |clear: f64, seed: u64| {
             let ahead = wall_at(circle + clear);
             let wall = move |a: f64| ahead(a - normal);
-            let past: Vec<(usize, DVec2)> = (1..=STEADY_SCANS as u64)
-                .flat_map(|k| {
-                    let scan = noisy_laser(wall, UTM_NOISE, 100 * seed + k);
-                    PastScan::of(&scan, &mount, Pose::default()).points
-                })
-                .collect();
-            let scan = noisy_laser(wall, UTM_NOISE, 100 * seed);
+            let (scan, steady) = pooled_laser(wall, &mount, seed, pooled);
             let raw = Bumpers::sense(&scan, &mount, 8, 1.27, 0.5, BumperRule::All);
-            let steady = denoised_returns(&scan, &mount, &past);
             (
                 guard(raw.clearance(), &P3AT, turn),
                 guard_steady(&steady, &P3AT, turn),
@@ -1027,15 +1041,7 @@ pub(crate) mod tests {
             }
         };
         for seed in 0..12 {
-            let corner = tip(0.01);
-            let past: Vec<(usize, DVec2)> = (1..=STEADY_SCANS as u64)
-                .flat_map(|k| {
-                    let scan = noisy_laser(corner, UTM_NOISE, 100 * seed + k);
-                    PastScan::of(&scan, &mount, Pose::default()).points
-                })
-                .collect();
-            let scan = noisy_laser(corner, UTM_NOISE, 100 * seed);
-            let steady = denoised_returns(&scan, &mount, &past);
+            let (_, steady) = pooled_laser(tip(0.01), &mount, seed, pooled);
             assert_eq!(
                 guard_steady(&steady, &P3AT, turn),
                 Guarded::Stop,
@@ -1065,14 +1071,7 @@ pub(crate) mod tests {
         // As a passage is given it: the noise at the follow radius.
         let sigma = STEADY_NOISE * UTM_NOISE.sigma(0.76);
         let narrow = |w: f64, seed: u64, scans: u64| {
-            let past: Vec<(usize, DVec2)> = (1..scans)
-                .flat_map(|k| {
-                    let scan = noisy_laser(way(w), UTM_NOISE, 100 * seed + k);
-                    PastScan::of(&scan, &mount, Pose::default()).points
-                })
-                .collect();
-            let scan = noisy_laser(way(w), UTM_NOISE, 100 * seed);
-            let steady = denoised_returns(&scan, &mount, &past);
+            let (_, steady) = pooled_laser(way(w), &mount, seed, scans);
             super::super::passage::narrows_ahead(&steady, length, width, sigma, length / 2.0 + 0.15)
         };
         let pooled = STEADY_SCANS as u64 + 1;
